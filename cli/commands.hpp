@@ -1,0 +1,13 @@
+// Subcommands of the canalsim program: one file per subcommand, each registering itself on the
+// application. The CLI only parses arguments and calls the libraries (DESIGN.md).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace canalsim::cli {
+
+void add_version_command(CLI::App& app);
+void add_dambreak_command(CLI::App& app);
+void add_prbs_command(CLI::App& app);
+
+}  // namespace canalsim::cli

@@ -1,0 +1,248 @@
+#include "scenarios/recording.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+#include <unistd.h>
+
+namespace canalsim {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  const auto last = s.find_last_not_of(" \t\r\n");
+  return s.substr(first, last - first + 1);
+}
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) fields.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') fields.emplace_back();
+  return fields;
+}
+
+[[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& what) {
+  throw InputError(source + ":" + std::to_string(line) + ": " + what);
+}
+
+double parse_cell(const std::string& text, const std::string& column, const std::string& source,
+                  std::size_t line) {
+  if (column == columns::regime) {
+    if (text == "free") return static_cast<double>(RegimeCode::free);
+    if (text == "submerged") return static_cast<double>(RegimeCode::submerged);
+  }
+  double value = 0.0;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  if (ec != std::errc() || ptr != end || text.empty()) {
+    fail(source, line, "column " + column + ": expected a number, found '" + text + "'");
+  }
+  if (!std::isfinite(value)) {
+    fail(source, line, "column " + column + ": value is " + text + ", expected a finite number");
+  }
+  return value;
+}
+
+void check_time_axis(const Recording& rec, const std::vector<std::size_t>& row_lines,
+                     double tolerance) {
+  const auto& t = rec.column(columns::time);
+  if (t.size() < 2) fail(rec.source, row_lines.empty() ? 1 : row_lines.back(),
+                         "expected at least two samples, found " + std::to_string(t.size()));
+  const double dt = t[1] - t[0];
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    const double step = t[i] - t[i - 1];
+    if (!(step > 0.0)) {
+      fail(rec.source, row_lines[i], "t_s is not increasing (" + std::to_string(t[i - 1]) +
+                                         " then " + std::to_string(t[i]) + ")");
+    }
+    if (std::abs(step - dt) > tolerance * dt) {
+      fail(rec.source, row_lines[i],
+           "t_s is not uniformly sampled (step " + std::to_string(step) + " s, expected " +
+               std::to_string(dt) + " s)");
+    }
+  }
+}
+
+std::string format_number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.10g", value);
+  return buffer;
+}
+
+}  // namespace
+
+bool Recording::has(const std::string& name) const {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+const std::vector<double>& Recording::column(const std::string& name) const {
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) {
+    throw InputError((source.empty() ? std::string("recording") : source) +
+                     ": missing column " + name);
+  }
+  return columns[static_cast<std::size_t>(it - names.begin())];
+}
+
+std::vector<double>& Recording::column(const std::string& name) {
+  return const_cast<std::vector<double>&>(std::as_const(*this).column(name));
+}
+
+void Recording::set_column(const std::string& name, std::vector<double> values) {
+  if (!columns.empty() && !has(name) && values.size() != size()) {
+    throw std::invalid_argument("Recording::set_column: column " + name + " has " +
+                                std::to_string(values.size()) + " rows, expected " +
+                                std::to_string(size()));
+  }
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it != names.end()) {
+    columns[static_cast<std::size_t>(it - names.begin())] = std::move(values);
+    return;
+  }
+  names.push_back(name);
+  columns.push_back(std::move(values));
+}
+
+std::string Recording::meta(const std::string& key, const std::string& fallback) const {
+  for (const auto& [k, v] : metadata) {
+    if (k == key) return v;
+  }
+  return fallback;
+}
+
+void Recording::set_meta(const std::string& key, const std::string& value) {
+  for (auto& [k, v] : metadata) {
+    if (k == key) {
+      v = value;
+      return;
+    }
+  }
+  metadata.emplace_back(key, value);
+}
+
+double Recording::sample_period() const {
+  const auto& t = column(columns::time);
+  if (t.size() < 2) throw InputError(source + ": fewer than two samples");
+  return t[1] - t[0];
+}
+
+Recording parse_recording(const std::string& text, const std::string& source,
+                          const RecordingReadOptions& options) {
+  Recording rec;
+  rec.source = source;
+  std::istringstream in(text);
+  std::string line;
+  std::size_t line_number = 0;
+  bool have_header = false;
+  std::vector<std::size_t> row_lines;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string content = trim(line);
+    if (content.empty()) continue;
+    if (content.front() == '#') {
+      if (have_header) continue;  // comments after the header are ignored
+      const std::string body = trim(content.substr(1));
+      const auto colon = body.find(':');
+      if (colon != std::string::npos) {
+        rec.metadata.emplace_back(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
+      }
+      continue;
+    }
+    const auto fields = split_csv_line(content);
+    if (!have_header) {
+      for (const auto& name : fields) {
+        if (name.empty()) fail(source, line_number, "empty column name in the header");
+        if (rec.has(name)) fail(source, line_number, "column " + name + " appears twice");
+        rec.names.push_back(name);
+      }
+      rec.columns.resize(rec.names.size());
+      have_header = true;
+      for (const auto& required : options.required) {
+        if (!rec.has(required)) {
+          fail(source, line_number, "missing required column " + required + " (header has " +
+                                        std::to_string(rec.names.size()) + " columns)");
+        }
+      }
+      continue;
+    }
+    if (fields.size() != rec.names.size()) {
+      fail(source, line_number, "expected " + std::to_string(rec.names.size()) +
+                                    " fields, found " + std::to_string(fields.size()));
+    }
+    for (std::size_t c = 0; c < fields.size(); ++c) {
+      rec.columns[c].push_back(parse_cell(fields[c], rec.names[c], source, line_number));
+    }
+    row_lines.push_back(line_number);
+  }
+  if (!have_header) fail(source, line_number, "no header line (expected e.g. t_s,u_mm,y_dwe_mm)");
+  if (rec.has(columns::time)) check_time_axis(rec, row_lines, options.uniform_tolerance);
+  return rec;
+}
+
+Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string() + ": cannot open the recording for reading");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  return parse_recording(buffer.str(), file.string(), options);
+}
+
+std::string format_recording(const Recording& rec) {
+  std::string out;
+  for (const auto& [key, value] : rec.metadata) out += "# " + key + ": " + value + "\n";
+  for (std::size_t c = 0; c < rec.names.size(); ++c) {
+    out += (c ? "," : "") + rec.names[c];
+  }
+  out += "\n";
+  for (std::size_t row = 0; row < rec.size(); ++row) {
+    for (std::size_t c = 0; c < rec.names.size(); ++c) {
+      if (c) out += ",";
+      const double v = rec.columns[c][row];
+      if (rec.names[c] == columns::regime) {
+        out += v >= 0.5 ? "submerged" : "free";
+      } else {
+        out += format_number(v);
+      }
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+void write_recording(const std::filesystem::path& file, const Recording& recording) {
+  write_file_atomically(file, format_recording(recording));
+}
+
+void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
+  const std::filesystem::path temporary =
+      file.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
+    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+    out.flush();
+    if (!out) {
+      out.close();
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      throw InputError(file.string() + ": write failed (disk full?)");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, file, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw InputError(file.string() + ": cannot replace the file: " + ec.message());
+  }
+}
+
+}  // namespace canalsim
