@@ -1,0 +1,136 @@
+// Scenario: a complete, validated description of a canal experiment (geometry, structures,
+// boundary conditions, sensors, numerics and the experiments to run), as read from a TOML file
+// (docs/scenarios.md documents every key with unit, range and default).
+//
+// Plain data only: building solver objects from it is scenarios/build.*; reading it from TOML is
+// scenarios/scenario_toml.*. Units: SI (m, s, m^3/s) for the hydraulics; the paper's mm for gate
+// commands and sensors, as in recordings.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace canalsim::scenarios {
+
+// A lateral offtake: a discharge withdrawn from a pool, spread over the cells around x.
+struct OfftakeSpec {
+  double x_m = 0.0;             // position from the pool's upstream end
+  double discharge_m3s = 0.0;   // withdrawn discharge (positive = out of the canal)
+};
+
+// One pool (reach) of prismatic channel.
+struct PoolSpec {
+  std::string name = "pool";
+  double length_m = 5.0;
+  double bottom_width_m = 0.08;
+  double side_slope = 0.0;          // horizontal per vertical (0 = rectangular)
+  double wall_height_m = 0.25;      // depth of the section; gate openings must stay below it
+  double bed_slope = 0.0;           // positive = bed falls downstream
+  double bed_elevation_m = 0.0;     // bed elevation at the pool's upstream end
+  double manning_n = 0.010;         // s m^-1/3
+  int cells = 100;
+  std::vector<OfftakeSpec> offtakes;
+};
+
+enum class GateLaw { swamee, simple };
+
+// A sluice gate (Swamee 1992, or the paper's eq. 9/11 with a discharge coefficient).
+struct GateSpec {
+  double width_m = 0.08;
+  double max_opening_m = 0.05;      // mechanical range [0, max]
+  double opening_m = 0.0;           // initial (or fixed) opening
+  GateLaw law = GateLaw::swamee;
+  double discharge_coefficient = 1.0;  // multiplier on Swamee's law; Cd of the simple laws
+  double leakage_m = 0.0;           // extra effective opening (a gate that does not seal)
+  double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
+  bool controlled = false;          // driven by the experiment's input signal
+};
+
+enum class UpstreamKind { level, reservoir, discharge, recorded };
+
+// What feeds the first gate (or the first pool when there is no head gate).
+struct UpstreamSpec {
+  UpstreamKind kind = UpstreamKind::level;
+  double level_m = 0.060;           // level: fixed level; reservoir: PID setpoint
+  double discharge_m3s = 0.0;       // discharge: fixed inflow into the first pool
+  // Reservoir with a pump under PID level control (the laboratory's upstream pool).
+  double plan_area_m2 = 0.05;
+  double pump_m3s_per_hz = 2.0e-5;  // pump flow per Hz of drive frequency
+  double max_frequency_hz = 50.0;
+  double pid_kp = 2000.0;           // Hz per m of level error
+  double pid_ti_s = 5.0;            // integral time
+  double pid_td_s = 0.0;            // derivative time
+};
+
+enum class DownstreamKind { gate, weir, level };
+
+struct DownstreamSpec {
+  DownstreamKind kind = DownstreamKind::gate;
+  GateSpec gate;                    // gate: fixed opening onto the tail level
+  double tail_level_m = 0.0;        // gate: level downstream of the end gate (0 = free outfall)
+  double weir_crest_m = 0.0;        // weir: crest height above the local bed
+  double weir_coefficient = 1.7;    // weir: Q = C w (h - crest)^1.5, C in m^0.5/s
+  double weir_width_m = 0.0;        // weir: 0 = channel width
+  double level_m = 0.05;            // level: fixed depth at the end
+};
+
+struct SensorSpec {
+  double period_s = 0.13;           // sampling period of every sensor
+  double resolution_mm = 0.05;      // quantisation step (paper eq. 17); 0 = none
+  double noise_std_mm = 0.0;        // Gaussian noise on level sensors
+  double delay_s = 0.0;             // pure delay of the level sensors
+  double offset_mm = 0.0;           // constant offset of the level sensors
+  double downstream_sensor_x_m = -1.0;  // position of y_dwe in the last pool; <0 = last cell
+  double below_gate_sensor_x_m = 0.1;   // position of y_dw from the head gate
+  std::uint64_t seed = 1;
+};
+
+enum class InputKind { constant, prbs, step, ramp, file };
+
+// The gate command u(t) of an experiment, about its operating opening.
+struct InputSpec {
+  InputKind kind = InputKind::prbs;
+  int prbs_stages = 9;              // 2..20; 9 stages give 511 bits
+  double prbs_clock_s = 0.5;
+  std::uint64_t prbs_seed = 1;
+  double amplitude_mm = 5.0;        // PRBS: ±amplitude; step/ramp: final change
+  double start_s = 10.0;            // step/ramp start
+  double ramp_duration_s = 10.0;
+  std::string file;                 // file: a recording whose u_mm column is replayed
+};
+
+struct ExperimentSpec {
+  std::string name;
+  double operating_opening_mm = 25.0;  // operating point of the controlled gate
+  double duration_s = 255.5;
+  double settle_s = 0.0;            // simulated but not recorded before t = 0
+  InputSpec input;
+  std::optional<SensorSpec> sensors;   // overrides the scenario's sensors
+};
+
+struct NumericsSpec {
+  double cfl = 0.8;
+  int order = 2;                    // 1 or 2
+  double dry_depth_m = 1e-6;
+  double steady_tolerance_m = 1e-10;  // steady state (Newton) convergence on depths
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::string source;               // file (or built-in name) it came from, for messages
+  UpstreamSpec upstream;
+  std::optional<GateSpec> head_gate;  // gate between the upstream supply and the first pool
+  std::vector<PoolSpec> pools;
+  std::vector<GateSpec> gates;      // gates[i] sits between pools[i] and pools[i+1]
+  DownstreamSpec downstream;
+  SensorSpec sensors;
+  NumericsSpec numerics;
+  std::vector<ExperimentSpec> experiments;
+
+  const ExperimentSpec* find_experiment(const std::string& name) const;
+};
+
+}  // namespace canalsim::scenarios

@@ -1,0 +1,246 @@
+#include "scenarios/scenario_toml.hpp"
+
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "scenarios/recording.hpp"
+#include "scenarios/toml_table.hpp"
+
+namespace canalsim::scenarios {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const Range kPositiveLength{0.0, 1.0e5, true};
+const Range kNonNegative{0.0, kInf};
+const Range kPositive{0.0, kInf, true};
+
+GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
+  GateSpec g = defaults;
+  g.width_m = t.number("width_m", g.width_m, {0.0, 1000.0, true}, "m");
+  g.max_opening_m = t.number("max_opening_m", g.max_opening_m, {0.0, 100.0, true}, "m");
+  g.opening_m = t.number("opening_m", g.opening_m, {0.0, g.max_opening_m}, "m");
+  g.law = t.choice("law", g.law == GateLaw::swamee ? "swamee" : "simple", {"swamee", "simple"}) == "swamee"
+              ? GateLaw::swamee
+              : GateLaw::simple;
+  g.discharge_coefficient = t.number("discharge_coefficient", g.discharge_coefficient, {0.0, 5.0, true}, "");
+  g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 100.0}, "m");
+  g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
+  g.controlled = t.boolean("controlled", g.controlled);
+  t.reject_unknown_keys();
+  return g;
+}
+
+PoolSpec read_pool(TomlTable t) {
+  PoolSpec p;
+  p.name = t.string("name", p.name);
+  p.length_m = t.required_number("length_m", kPositiveLength, "m");
+  p.bottom_width_m = t.required_number("bottom_width_m", {0.0, 1000.0, true}, "m");
+  p.side_slope = t.number("side_slope", p.side_slope, {0.0, 10.0}, "(horizontal per vertical)");
+  p.wall_height_m = t.number("wall_height_m", p.wall_height_m, {0.0, 100.0, true}, "m");
+  p.bed_slope = t.number("bed_slope", p.bed_slope, {-0.1, 0.1}, "m/m");
+  p.bed_elevation_m = t.number("bed_elevation_m", p.bed_elevation_m, {-1.0e4, 1.0e4}, "m");
+  p.manning_n = t.number("manning_n", p.manning_n, {0.0, 0.2}, "s m^-1/3");
+  p.cells = t.integer("cells", p.cells, 4, 1000000);
+  for (auto o : t.tables("offtakes")) {
+    OfftakeSpec off;
+    off.x_m = o.required_number("x_m", {0.0, p.length_m}, "m (inside the pool)");
+    off.discharge_m3s = o.required_number("discharge_m3s", {0.0, 1.0e4}, "m^3/s");
+    o.reject_unknown_keys();
+    p.offtakes.push_back(off);
+  }
+  t.reject_unknown_keys();
+  return p;
+}
+
+UpstreamSpec read_upstream(TomlTable t) {
+  UpstreamSpec u;
+  const std::string kind = t.choice("kind", "level", {"level", "reservoir", "discharge", "recorded"});
+  u.kind = kind == "level"       ? UpstreamKind::level
+           : kind == "reservoir" ? UpstreamKind::reservoir
+           : kind == "discharge" ? UpstreamKind::discharge
+                                 : UpstreamKind::recorded;
+  u.level_m = t.number("level_m", u.level_m, {0.0, 100.0, true}, "m");
+  u.discharge_m3s = t.number("discharge_m3s", u.discharge_m3s, {0.0, 1.0e5}, "m^3/s");
+  u.plan_area_m2 = t.number("plan_area_m2", u.plan_area_m2, kPositive, "m^2");
+  u.pump_m3s_per_hz = t.number("pump_m3s_per_hz", u.pump_m3s_per_hz, kPositive, "m^3/s per Hz");
+  u.max_frequency_hz = t.number("max_frequency_hz", u.max_frequency_hz, {0.0, 1000.0, true}, "Hz");
+  u.pid_kp = t.number("pid_kp", u.pid_kp, kNonNegative, "Hz/m");
+  u.pid_ti_s = t.number("pid_ti_s", u.pid_ti_s, kPositive, "s");
+  u.pid_td_s = t.number("pid_td_s", u.pid_td_s, kNonNegative, "s");
+  t.reject_unknown_keys();
+  return u;
+}
+
+DownstreamSpec read_downstream(TomlTable t) {
+  DownstreamSpec d;
+  const std::string kind = t.choice("kind", "gate", {"gate", "weir", "level"});
+  d.kind = kind == "gate" ? DownstreamKind::gate : kind == "weir" ? DownstreamKind::weir : DownstreamKind::level;
+  if (t.has("gate")) d.gate = read_gate(t.table("gate"), d.gate);
+  d.tail_level_m = t.number("tail_level_m", d.tail_level_m, {0.0, 100.0}, "m (0 = free outfall)");
+  d.weir_crest_m = t.number("weir_crest_m", d.weir_crest_m, {0.0, 100.0}, "m");
+  d.weir_coefficient = t.number("weir_coefficient", d.weir_coefficient, {0.0, 10.0, true}, "m^0.5/s");
+  d.weir_width_m = t.number("weir_width_m", d.weir_width_m, {0.0, 1000.0}, "m (0 = channel width)");
+  d.level_m = t.number("level_m", d.level_m, {0.0, 100.0, true}, "m");
+  t.reject_unknown_keys();
+  return d;
+}
+
+SensorSpec read_sensors(TomlTable t, const SensorSpec& defaults) {
+  SensorSpec s = defaults;
+  s.period_s = t.number("period_s", s.period_s, {0.0, 3600.0, true}, "s");
+  s.resolution_mm = t.number("resolution_mm", s.resolution_mm, {0.0, 100.0}, "mm (0 = none)");
+  s.noise_std_mm = t.number("noise_std_mm", s.noise_std_mm, {0.0, 100.0}, "mm");
+  s.delay_s = t.number("delay_s", s.delay_s, {0.0, 600.0}, "s");
+  s.offset_mm = t.number("offset_mm", s.offset_mm, {-1000.0, 1000.0}, "mm");
+  s.downstream_sensor_x_m = t.number("downstream_sensor_x_m", s.downstream_sensor_x_m, {-1.0, 1.0e5}, "m (-1 = last cell)");
+  s.below_gate_sensor_x_m = t.number("below_gate_sensor_x_m", s.below_gate_sensor_x_m, {0.0, 1.0e5}, "m");
+  s.seed = t.seed("seed", s.seed);
+  t.reject_unknown_keys();
+  return s;
+}
+
+InputSpec read_input(TomlTable t) {
+  InputSpec in;
+  const std::string kind = t.choice("kind", "prbs", {"constant", "prbs", "step", "ramp", "file"});
+  in.kind = kind == "constant" ? InputKind::constant
+            : kind == "prbs"   ? InputKind::prbs
+            : kind == "step"   ? InputKind::step
+            : kind == "ramp"   ? InputKind::ramp
+                               : InputKind::file;
+  in.prbs_stages = t.integer("stages", in.prbs_stages, 2, 20);
+  in.prbs_clock_s = t.number("clock_s", in.prbs_clock_s, {0.0, 3600.0, true}, "s");
+  in.prbs_seed = t.seed("seed", in.prbs_seed);
+  in.amplitude_mm = t.number("amplitude_mm", in.amplitude_mm, {-1000.0, 1000.0}, "mm");
+  in.start_s = t.number("start_s", in.start_s, kNonNegative, "s");
+  in.ramp_duration_s = t.number("ramp_duration_s", in.ramp_duration_s, kPositive, "s");
+  in.file = t.string("file", in.file);
+  if (in.kind == InputKind::file && in.file.empty()) t.fail("file", "is missing: expected the path of a recording with a u_mm column");
+  t.reject_unknown_keys();
+  return in;
+}
+
+ExperimentSpec read_experiment(TomlTable t, const SensorSpec& scenario_sensors) {
+  ExperimentSpec e;
+  e.name = t.string("name", "");
+  if (e.name.empty()) t.fail("name", "is missing: expected a non-empty experiment name");
+  e.operating_opening_mm = t.required_number("operating_opening_mm", {0.0, 1.0e5}, "mm");
+  e.duration_s = t.number("duration_s", e.duration_s, {0.0, 1.0e7, true}, "s");
+  e.settle_s = t.number("settle_s", e.settle_s, kNonNegative, "s");
+  if (t.has("input")) e.input = read_input(t.table("input"));
+  if (t.has("sensors")) e.sensors = read_sensors(t.table("sensors"), scenario_sensors);
+  t.reject_unknown_keys();
+  return e;
+}
+
+Scenario read_scenario(TomlTable root, const std::string& source) {
+  Scenario s;
+  s.source = source;
+  s.name = root.string("name", "");
+  s.description = root.string("description", "");
+  s.upstream = read_upstream(root.table("upstream"));
+  if (root.has("head_gate")) s.head_gate = read_gate(root.table("head_gate"), GateSpec{});
+  for (auto p : root.tables("pools")) s.pools.push_back(read_pool(p));
+  if (s.pools.empty()) root.fail("", "expected at least one [[pools]] table");
+  for (auto g : root.tables("gates")) s.gates.push_back(read_gate(g, GateSpec{}));
+  s.downstream = read_downstream(root.table("downstream"));
+  s.sensors = read_sensors(root.table("sensors"), SensorSpec{});
+  {
+    auto n = root.table("numerics");
+    s.numerics.cfl = n.number("cfl", s.numerics.cfl, {0.0, 1.0, true}, "");
+    s.numerics.order = n.integer("order", s.numerics.order, 1, 2);
+    s.numerics.dry_depth_m = n.number("dry_depth_m", s.numerics.dry_depth_m, {0.0, 1.0, true}, "m");
+    s.numerics.steady_tolerance_m = n.number("steady_tolerance_m", s.numerics.steady_tolerance_m, {0.0, 1.0, true}, "m");
+    n.reject_unknown_keys();
+  }
+  for (auto e : root.tables("experiments")) s.experiments.push_back(read_experiment(e, s.sensors));
+  root.reject_unknown_keys();
+  return s;
+}
+
+[[noreturn]] void invalid(const Scenario& s, const std::string& key, const std::string& what) {
+  throw InputError(s.source + ": " + key + ": " + what);
+}
+
+void check_gate_fits(const Scenario& s, const GateSpec& g, const PoolSpec& pool, const std::string& key) {
+  if (g.max_opening_m > pool.wall_height_m) {
+    invalid(s, key + ".max_opening_m", "= " + std::to_string(g.max_opening_m) +
+                                           " m: expected at most the wall height of pool '" + pool.name +
+                                           "' (" + std::to_string(pool.wall_height_m) + " m)");
+  }
+}
+
+}  // namespace
+
+const ExperimentSpec* Scenario::find_experiment(const std::string& wanted) const {
+  for (const auto& e : experiments) {
+    if (e.name == wanted) return &e;
+  }
+  return nullptr;
+}
+
+void validate(const Scenario& s) {
+  if (s.gates.size() + 1 != s.pools.size()) {
+    invalid(s, "gates", std::to_string(s.gates.size()) + " gates for " + std::to_string(s.pools.size()) +
+                            " pools: expected one [[gates]] table between each pair of pools");
+  }
+  if (s.head_gate) check_gate_fits(s, *s.head_gate, s.pools.front(), "head_gate");
+  for (std::size_t i = 0; i < s.gates.size(); ++i) {
+    check_gate_fits(s, s.gates[i], s.pools[i + 1], "gates[" + std::to_string(i) + "]");
+  }
+  if (s.downstream.kind == DownstreamKind::gate) {
+    check_gate_fits(s, s.downstream.gate, s.pools.back(), "downstream.gate");
+  }
+  if (!s.head_gate && s.upstream.kind != UpstreamKind::discharge) {
+    invalid(s, "upstream.kind", "a level, reservoir or recorded upstream needs a [head_gate]; "
+                                "expected kind = \"discharge\" without one");
+  }
+  int controlled = (s.head_gate && s.head_gate->controlled) ? 1 : 0;
+  for (const auto& g : s.gates) controlled += g.controlled ? 1 : 0;
+  if (s.downstream.kind == DownstreamKind::gate && s.downstream.gate.controlled) ++controlled;
+  if (controlled > 1) invalid(s, "controlled", "more than one gate has controlled = true: expected at most one");
+  const double last_length = s.pools.back().length_m;
+  if (s.sensors.downstream_sensor_x_m > last_length) {
+    invalid(s, "sensors.downstream_sensor_x_m", "expected at most the last pool's length (" +
+                                                    std::to_string(last_length) + " m)");
+  }
+  const GateSpec* driven = nullptr;
+  if (s.head_gate && s.head_gate->controlled) driven = &*s.head_gate;
+  for (const auto& g : s.gates) if (g.controlled) driven = &g;
+  for (std::size_t i = 0; i < s.experiments.size(); ++i) {
+    const auto& e = s.experiments[i];
+    const std::string key = "experiments[" + std::to_string(i) + "]";
+    if (!driven) invalid(s, key, "an experiment needs a gate with controlled = true");
+    const double max_mm = driven->max_opening_m * 1000.0;
+    if (e.operating_opening_mm > max_mm) {
+      invalid(s, key + ".operating_opening_mm", "= " + std::to_string(e.operating_opening_mm) +
+                                                    " mm: expected at most the gate's max_opening_m (" +
+                                                    std::to_string(max_mm) + " mm)");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (s.experiments[j].name == e.name) invalid(s, key + ".name", "'" + e.name + "' is used twice");
+    }
+  }
+}
+
+Scenario parse_scenario(const std::string& toml_text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, source);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source + ":" + std::to_string(e.source().begin.line) + ": " + std::string(e.description()));
+  }
+  Scenario s = read_scenario(TomlTable(root, source, ""), source);
+  validate(s);
+  return s;
+}
+
+Scenario load_scenario(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string() + ": cannot open the scenario file for reading");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scenario(text.str(), file.string());
+}
+
+}  // namespace canalsim::scenarios

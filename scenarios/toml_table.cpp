@@ -1,0 +1,198 @@
+#include "scenarios/toml_table.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "scenarios/recording.hpp"
+
+namespace canalsim::scenarios {
+namespace {
+
+std::string format_value(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    default: return "a date/time";
+  }
+}
+
+}  // namespace
+
+bool Range::contains(double v) const {
+  if (!std::isfinite(v)) return false;
+  const bool above = min_open ? v > min : v >= min;
+  const bool below = max_open ? v < max : v <= max;
+  return above && below;
+}
+
+std::string Range::describe() const {
+  return std::string(min_open ? "(" : "[") + format_value(min) + ", " + format_value(max) +
+         (max_open ? ")" : "]");
+}
+
+TomlTable::TomlTable(const toml::table& table, std::string file, std::string path)
+    : table_(table), file_(std::move(file)), path_(std::move(path)) {}
+
+std::string TomlTable::dotted(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+std::string TomlTable::where(const toml::node* node) const {
+  const auto line = node ? node->source().begin.line : table_.source().begin.line;
+  return file_ + ":" + std::to_string(line);
+}
+
+void TomlTable::fail(const std::string& key, const std::string& what) const {
+  const toml::node* node = key.empty() ? nullptr : table_.get(key);
+  throw InputError(where(node) + ": " + (key.empty() ? path_ : dotted(key)) + ": " + what);
+}
+
+bool TomlTable::has(const std::string& key) const { return table_.contains(key); }
+
+const toml::node* TomlTable::find(const std::string& key) {
+  used_.insert(key);
+  return table_.get(key);
+}
+
+double TomlTable::number(const std::string& key, double fallback, Range range,
+                         const std::string& unit) {
+  const toml::node* node = find(key);
+  if (!node) return fallback;
+  const auto value = node->value<double>();
+  const std::string expected = "expected a number in " + range.describe() + (unit.empty() ? "" : " " + unit);
+  if (!value || !(node->is_integer() || node->is_floating_point())) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": " + expected);
+  }
+  if (!range.contains(*value)) {
+    throw InputError(where(node) + ": " + dotted(key) + " = " + format_value(*value) + ": " + expected);
+  }
+  return *value;
+}
+
+double TomlTable::required_number(const std::string& key, Range range, const std::string& unit) {
+  if (!has(key)) {
+    throw InputError(where(nullptr) + ": " + dotted(key) + " is missing: expected a number in " +
+                     range.describe() + (unit.empty() ? "" : " " + unit));
+  }
+  return number(key, 0.0, range, unit);
+}
+
+int TomlTable::integer(const std::string& key, int fallback, int min, int max) {
+  const toml::node* node = find(key);
+  if (!node) return fallback;
+  const std::string expected =
+      "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  if (!node->is_integer()) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": " + expected);
+  }
+  const auto value = *node->value<std::int64_t>();
+  if (value < min || value > max) {
+    throw InputError(where(node) + ": " + dotted(key) + " = " + std::to_string(value) + ": " + expected);
+  }
+  return static_cast<int>(value);
+}
+
+std::uint64_t TomlTable::seed(const std::string& key, std::uint64_t fallback) {
+  const toml::node* node = find(key);
+  if (!node) return fallback;
+  if (!node->is_integer() || *node->value<std::int64_t>() < 0) {
+    throw InputError(where(node) + ": " + dotted(key) + ": expected a non-negative integer seed");
+  }
+  return static_cast<std::uint64_t>(*node->value<std::int64_t>());
+}
+
+bool TomlTable::boolean(const std::string& key, bool fallback) {
+  const toml::node* node = find(key);
+  if (!node) return fallback;
+  if (!node->is_boolean()) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) +
+                     ": expected true or false");
+  }
+  return *node->value<bool>();
+}
+
+std::string TomlTable::string(const std::string& key, const std::string& fallback) {
+  const toml::node* node = find(key);
+  if (!node) return fallback;
+  if (!node->is_string()) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": expected a string");
+  }
+  return *node->value<std::string>();
+}
+
+std::string TomlTable::choice(const std::string& key, const std::string& fallback,
+                              std::initializer_list<const char*> allowed) {
+  const std::string value = string(key, fallback);
+  std::string list;
+  for (const char* option : allowed) {
+    if (value == option) return value;
+    list += (list.empty() ? "" : ", ") + std::string(option);
+  }
+  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = \"" + value +
+                   "\": expected one of " + list);
+}
+
+TomlTable TomlTable::table(const std::string& key) {
+  static const toml::table empty;
+  const toml::node* node = find(key);
+  if (!node) return TomlTable(empty, file_, dotted(key));
+  if (!node->is_table()) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": expected a table");
+  }
+  return TomlTable(*node->as_table(), file_, dotted(key));
+}
+
+std::vector<TomlTable> TomlTable::tables(const std::string& key) {
+  std::vector<TomlTable> result;
+  const toml::node* node = find(key);
+  if (!node) return result;
+  const toml::array* array = node->as_array();
+  if (!array || !array->is_array_of_tables()) {
+    throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) +
+                     ": expected an array of tables ([[" + dotted(key) + "]])");
+  }
+  for (std::size_t i = 0; i < array->size(); ++i) {
+    result.emplace_back(*array->get(i)->as_table(), file_, dotted(key) + "[" + std::to_string(i) + "]");
+  }
+  return result;
+}
+
+std::vector<double> TomlTable::numbers(const std::string& key, Range range, const std::string& unit) {
+  std::vector<double> result;
+  const toml::node* node = find(key);
+  if (!node) return result;
+  const toml::array* array = node->as_array();
+  const std::string expected = "expected an array of numbers in " + range.describe() + " " + unit;
+  if (!array) throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": " + expected);
+  for (const auto& element : *array) {
+    const auto value = element.value<double>();
+    if (!value || !range.contains(*value)) {
+      throw InputError(where(&element) + ": " + dotted(key) + ": " + expected);
+    }
+    result.push_back(*value);
+  }
+  return result;
+}
+
+void TomlTable::reject_unknown_keys() const {
+  for (const auto& [key, node] : table_) {
+    const std::string name(key.str());
+    if (!used_.count(name)) {
+      throw InputError(where(&node) + ": unknown key " + dotted(name) +
+                       " (docs/scenarios.md lists the keys)");
+    }
+  }
+}
+
+}  // namespace canalsim::scenarios

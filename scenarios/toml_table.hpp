@@ -1,0 +1,63 @@
+// Strict reading of a TOML table: every key is checked for type and range, unknown keys are
+// errors, and every message names the file, the line and the dotted key with what was expected:
+//   lab.toml:12: pools[0].bottom_width_m = -0.08: expected a number in (0, 1000] m
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+namespace canalsim::scenarios {
+
+// Inclusive or exclusive numeric range used in messages and checks.
+struct Range {
+  double min;
+  double max;
+  bool min_open = false;  // true: value must be > min
+  bool max_open = false;  // true: value must be < max
+  bool contains(double v) const;
+  std::string describe() const;  // "(0, 1000]"
+};
+
+class TomlTable {
+ public:
+  TomlTable(const toml::table& table, std::string file, std::string path);
+
+  double number(const std::string& key, double fallback, Range range, const std::string& unit);
+  double required_number(const std::string& key, Range range, const std::string& unit);
+  int integer(const std::string& key, int fallback, int min, int max);
+  std::uint64_t seed(const std::string& key, std::uint64_t fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key, const std::string& fallback);
+  // A string that must be one of `allowed`.
+  std::string choice(const std::string& key, const std::string& fallback,
+                     std::initializer_list<const char*> allowed);
+  bool has(const std::string& key) const;
+  TomlTable table(const std::string& key);
+  // An array of tables ([[key]]); empty when absent.
+  std::vector<TomlTable> tables(const std::string& key);
+  std::vector<double> numbers(const std::string& key, Range range, const std::string& unit);
+
+  // Throws InputError for every key that was present but never read.
+  void reject_unknown_keys() const;
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  const toml::node* find(const std::string& key);
+  std::string dotted(const std::string& key) const;
+  std::string where(const toml::node* node) const;
+
+  const toml::table& table_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+}  // namespace canalsim::scenarios
