@@ -1,0 +1,100 @@
+// Upstream reservoir fed by a pump under PID level control, as in the laboratory canal of the
+// paper (Section 2 and 4.1: "the control of the upstream pool water level y_up(t) by varying the
+// pump frequency was closed ... a range of frequency variation from 0 to 50 Hz", y_up ~ 60 mm).
+//
+// Model (prismatic reservoir of plan area A, level y measured from the gate sill):
+//
+//   dV/dt = Q_pump - Q_out,      y = V / A,      Q_pump = k_q f,   f in [f_min, f_max]
+//
+// with the pump flow proportional to its frequency f (k_q = flow_per_hz), and the controller
+//
+//   f_unsat = Kp e + I - Kd dy/dt,   e = y_set - y,   f = clamp(f_unsat, f_min, f_max)
+//
+// (derivative on the measurement, so a setpoint change does not kick the pump). The integral I
+// is protected against windup while the pump saturates, either by conditional integration (I
+// stops while saturated and the error would drive it further into saturation) or by
+// back-calculation (dI/dt = Ki e + (f - f_unsat) / T_t; Astrom & Hagglund, Advanced PID
+// Control, 2006, Sec. 3.5).
+//
+// advance(dt, Q_out) holds the pump frequency and the outflow constant over the step and
+// integrates the volume exactly for them (explicit in the controller, exact in the balance):
+// V(t + dt) = V(t) + (Q_pump - Q_out) dt. Given the outflow the solver used through the gate,
+// mass is therefore conserved to round-off; cumulative inflow and outflow volumes are kept for
+// the balance check.
+#pragma once
+
+#include <string>
+
+namespace canalsim::gates {
+
+enum class AntiWindup {
+  none,                     // plain integration (winds up; for comparison)
+  conditional_integration,  // freeze I while saturated and the error pushes further out
+  back_calculation,         // bleed I with the saturation excess over tracking_time
+};
+
+const char* to_string(AntiWindup scheme);
+
+// Defaults describe an assumed laboratory set-up (the paper gives only the 0-50 Hz range and the
+// 60 mm level): a 0.1 m^2 head tank, a pump of 3 L/s at 50 Hz, and gains that place the closed
+// loop A y'' + k_q Kp y' + k_q Ki y = 0 at a natural frequency of about 0.5 rad/s, critically
+// damped.
+struct ReservoirOptions {
+  double plan_area = 0.1;                  // A [m^2], range (0, 1e6]
+  double initial_level = 0.060;            // y(0) [m], range [0, 100]
+  double setpoint = 0.060;                 // y_set [m], range [0, 100]
+  double flow_per_hz = 6e-5;               // k_q [m^3/s per Hz], range (0, 100]
+  double min_frequency = 0.0;              // f_min [Hz], range [0, max_frequency)
+  double max_frequency = 50.0;             // f_max [Hz], range (min_frequency, 1000]
+  double proportional_gain = 1700.0;       // Kp [Hz/m], range [0, 1e9]
+  double integral_gain = 420.0;            // Ki [Hz/(m s)], range [0, 1e9]
+  double derivative_gain = 0.0;            // Kd [Hz s/m], range [0, 1e9]
+  AntiWindup anti_windup = AntiWindup::back_calculation;
+  double tracking_time = 1.0;              // T_t [s] for back-calculation, range (0, 1e6]
+
+  // Empty when valid; otherwise one line naming the field and its allowed range.
+  [[nodiscard]] std::string validate() const;
+};
+
+class Reservoir {
+ public:
+  Reservoir() : Reservoir(ReservoirOptions{}) {}
+  // Throws std::invalid_argument with validate()'s message when the options are invalid.
+  explicit Reservoir(const ReservoirOptions& options);
+
+  // Presets the integral so that, with the level on the setpoint, the pump delivers `outflow`
+  // [m^3/s] (clamped to the pump's range): the experiment starts at steady state.
+  void start_at_steady_state(double outflow);
+
+  // Advances dt seconds (dt > 0) with the outflow [m^3/s] through the gate held constant;
+  // returns the new level [m].
+  double advance(double dt, double outflow);
+
+  double level() const { return volume_ / options_.plan_area; }
+  double volume() const { return volume_; }
+  double initial_volume() const { return initial_volume_; }
+  double frequency() const { return frequency_; }       // pump frequency of the last step [Hz]
+  double pump_flow() const { return frequency_ * options_.flow_per_hz; }  // [m^3/s]
+  double integral() const { return integral_; }         // controller integral state [Hz]
+  bool saturated() const { return saturated_; }
+  double total_inflow() const { return total_inflow_; }    // cumulative pump volume [m^3]
+  double total_outflow() const { return total_outflow_; }  // cumulative gate volume [m^3]
+  // V - V0 - (inflow - outflow): zero up to round-off.
+  double volume_balance_error() const;
+  const ReservoirOptions& options() const { return options_; }
+
+ private:
+  void update_integral(double dt, double error, double unsaturated);
+
+  ReservoirOptions options_;
+  double volume_ = 0.0;
+  double initial_volume_ = 0.0;
+  double integral_ = 0.0;
+  double frequency_ = 0.0;
+  double previous_level_ = 0.0;
+  bool saturated_ = false;
+  double total_inflow_ = 0.0;
+  double total_outflow_ = 0.0;
+};
+
+}  // namespace canalsim::gates

@@ -1,0 +1,272 @@
+#include "gates/sluice_gate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace canalsim::gates {
+namespace {
+
+// Critical flow coefficient: q_c / (sqrt(g) y1^{3/2}) = (2/3)^{3/2}.
+const double critical_coefficient = std::pow(2.0 / 3.0, 1.5);
+
+// Swamee's constants (header comment).
+constexpr double swamee_free_coefficient = 0.864;
+constexpr double swamee_contraction_exponent = 0.072;
+constexpr double swamee_jump_ratio = 15.0;
+constexpr double border_coefficient = 0.81;  // eq. (8), (10), (23)
+constexpr double border_exponent = 0.72;
+constexpr double submergence_weight = 0.32;
+constexpr double submergence_exponent = 0.7;
+
+// The derivatives of h^0.7 and (y_lc - y1)^0.7 are unbounded at h = 0 and at the border. For the
+// Newton solve we evaluate x^-0.3 no closer than this fraction of the upstream depth: the slope is
+// then large and finite with the right sign (the discharge itself is not regularised).
+constexpr double singular_floor = 1e-9;
+
+std::string range_problem(const char* field, const char* range, double value) {
+  std::ostringstream out;
+  out << field << ": expected a value in " << range << ", got " << value;
+  return out.str();
+}
+
+bool in_half_open(double value, double low, double high) {  // (low, high]
+  return std::isfinite(value) && value > low && value <= high;
+}
+
+// Dimensionless free-flow law f(r) = q_f / (sqrt(g) y1^{3/2}) at r = a / y1.
+double free_flow_shape(const SluiceGateOptions& o, double r) {
+  const double m = o.discharge_coefficient_multiplier;
+  if (o.law == GateLaw::simple) return m * o.simple_discharge_coefficient * std::sqrt(2.0) * r;
+  if (r <= 0.0 || r >= 1.0) return 0.0;
+  return m * swamee_free_coefficient * r *
+         std::pow((1.0 - r) / (1.0 + swamee_jump_ratio * r), swamee_contraction_exponent);
+}
+
+// Maximiser of the free-flow shape on (0, 1]: golden-section search for Swamee (unimodal), 1 for
+// the simple law (linear in r).
+double free_flow_shape_argmax(const SluiceGateOptions& o) {
+  if (o.law == GateLaw::simple) return 1.0;
+  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-14; ++i) {
+    const double x1 = hi - ratio * (hi - lo);
+    const double x2 = lo + ratio * (hi - lo);
+    if (free_flow_shape(o, x1) < free_flow_shape(o, x2)) {
+      lo = x1;
+    } else {
+      hi = x2;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Smallest r with f(r) = critical_coefficient on (0, r_max], by bisection (f increases there).
+double critical_ratio_below(const SluiceGateOptions& o, double r_max) {
+  double lo = 0.0, hi = r_max;
+  for (int i = 0; i < 200 && hi - lo > 1e-15; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (free_flow_shape(o, mid) < critical_coefficient) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return hi;
+}
+
+double floored_power(double x, double exponent, double floor) {
+  return std::pow(std::max(x, floor), exponent);
+}
+
+}  // namespace
+
+const char* to_string(GateLaw law) {
+  switch (law) {
+    case GateLaw::swamee: return "swamee";
+    case GateLaw::simple: return "simple";
+  }
+  return "unknown";
+}
+
+const char* to_string(GateRegime regime) {
+  switch (regime) {
+    case GateRegime::closed: return "closed";
+    case GateRegime::free: return "free";
+    case GateRegime::submerged: return "submerged";
+    case GateRegime::out_of_water: return "out_of_water";
+  }
+  return "unknown";
+}
+
+std::string SluiceGateOptions::validate() const {
+  if (law != GateLaw::swamee && law != GateLaw::simple) return "law: expected swamee or simple";
+  if (!in_half_open(discharge_coefficient_multiplier, 0.0, 10.0)) {
+    return range_problem("discharge_coefficient_multiplier", "(0, 10]",
+                         discharge_coefficient_multiplier);
+  }
+  if (!in_half_open(simple_discharge_coefficient, 0.0, 2.0)) {
+    return range_problem("simple_discharge_coefficient", "(0, 2]", simple_discharge_coefficient);
+  }
+  if (!std::isfinite(leakage_opening) || leakage_opening < 0.0 || leakage_opening > 1.0) {
+    return range_problem("leakage_opening", "[0, 1] m", leakage_opening);
+  }
+  if (!in_half_open(gravity, 0.0, 100.0)) return range_problem("gravity", "(0, 100] m/s^2", gravity);
+  return "";
+}
+
+double limit_condition_level(double y_dwe, double x_up) {
+  if (x_up <= 0.0) return std::numeric_limits<double>::infinity();
+  if (y_dwe <= 0.0) return 0.0;
+  return border_coefficient * y_dwe * std::pow(y_dwe / x_up, border_exponent);
+}
+
+GateRegime classify_regime(double y_up, double y_dwe, double x_up) {
+  const double high = std::max(y_up, y_dwe);
+  const double low = std::min(y_up, y_dwe);
+  if (x_up <= 0.0 || high <= 0.0) return GateRegime::closed;
+  if (x_up >= high) return GateRegime::out_of_water;
+  return high > limit_condition_level(low, x_up) ? GateRegime::free : GateRegime::submerged;
+}
+
+double swamee_free_discharge(double y1, double a, double gravity) {
+  if (a <= 0.0 || y1 <= a) return 0.0;
+  return swamee_free_coefficient * a * std::sqrt(gravity * y1) *
+         std::pow((y1 - a) / (y1 + swamee_jump_ratio * a), swamee_contraction_exponent);
+}
+
+double critical_discharge(double y1, double gravity) {
+  if (y1 <= 0.0) return 0.0;
+  return std::sqrt(gravity) * std::pow(2.0 / 3.0 * y1, 1.5);
+}
+
+SluiceGate::SluiceGate(const SluiceGateOptions& options) : options_(options) {
+  const std::string problem = options.validate();
+  if (!problem.empty()) throw std::invalid_argument("sluice gate: " + problem);
+  const double r_max = free_flow_shape_argmax(options_);
+  reaches_critical_ = free_flow_shape(options_, r_max) >= critical_coefficient;
+  cap_ratio_ = reaches_critical_ ? critical_ratio_below(options_, r_max) : r_max;
+}
+
+// Free-flow discharge per unit width at the opening the law sees, with partials in y1 and a.
+SluiceGate::Partials SluiceGate::free_flow(double y1, double a) const {
+  const double g = options_.gravity;
+  const double m = options_.discharge_coefficient_multiplier;
+  Partials p;
+  if (a <= 0.0 || y1 <= 0.0) return p;
+  if (options_.law == GateLaw::simple) {
+    p.q = m * options_.simple_discharge_coefficient * a * std::sqrt(2.0 * g * y1);  // eq. (9)
+    p.d_y1 = p.q / (2.0 * y1);
+    p.d_a = p.q / a;
+    return p;
+  }
+  if (a >= y1) return p;  // not reached: the cap keeps a below y1 for Swamee
+  const double jump = y1 + swamee_jump_ratio * a;
+  p.q = m * swamee_free_discharge(y1, a, g);
+  // log-derivatives of a sqrt(y1) ((y1 - a)/(y1 + 15 a))^0.072
+  p.d_y1 = p.q * (0.5 / y1 + swamee_contraction_exponent * (1.0 / (y1 - a) - 1.0 / jump));
+  p.d_a = p.q * (1.0 / a - swamee_contraction_exponent * (1.0 / (y1 - a) + swamee_jump_ratio / jump));
+  return p;
+}
+
+// Flow from side 1 (the higher one, y1 >= y3) to side 3; partials in (y1, y3, raw opening a).
+SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateRegime& regime) const {
+  Partials out;
+  const double geometric = std::max(a, 0.0) + options_.leakage_opening;
+  const double dgeometric_da = a > 0.0 ? 1.0 : 0.0;
+  regime = GateRegime::closed;
+  if (geometric <= 0.0 || y1 <= 0.0) return out;
+  const bool out_of_water = geometric >= y1;
+
+  // Opening seen by the law: frozen at cap_ratio y1 near and above the surface (header comment).
+  const double cap = cap_ratio_ * y1;
+  const bool capped = geometric >= cap;
+  const double a_seen = capped ? cap : geometric;
+  const double dseen_da = capped ? 0.0 : dgeometric_da;
+  const double dseen_dy1 = capped ? cap_ratio_ : 0.0;
+
+  // Free discharge Qf(y1, a) and its total partials.
+  double qf = 0.0, dqf_dy1 = 0.0, dqf_da = 0.0;
+  if (out_of_water && !reaches_critical_) {
+    qf = critical_discharge(y1, options_.gravity);  // jump documented in the header
+    dqf_dy1 = 1.5 * qf / y1;
+  } else {
+    const Partials f = free_flow(y1, a_seen);
+    qf = f.q;
+    dqf_dy1 = f.d_y1 + f.d_a * dseen_dy1;
+    dqf_da = f.d_a * dseen_da;
+  }
+
+  const double y_lc = limit_condition_level(y3, a_seen);
+  if (y1 > y_lc) {  // condition (8): free flow
+    regime = out_of_water ? GateRegime::out_of_water : GateRegime::free;
+    out.q = qf;
+    out.d_y1 = dqf_dy1;
+    out.d_a = dqf_da;
+    return out;
+  }
+  regime = out_of_water ? GateRegime::out_of_water : GateRegime::submerged;  // condition (10)
+  const double head = y1 - y3;
+  const double floor = singular_floor * y1;
+
+  if (options_.law == GateLaw::simple) {  // eq. (11)
+    const double coefficient = options_.discharge_coefficient_multiplier *
+                               options_.simple_discharge_coefficient;
+    const double root = std::sqrt(2.0 * options_.gravity * head);
+    out.q = coefficient * a_seen * root;
+    const double dq_dhead = coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * 0.5 /
+                            std::sqrt(std::max(head, floor));
+    out.d_y1 = dq_dhead + coefficient * root * dseen_dy1;
+    out.d_y3 = -dq_dhead;
+    out.d_a = coefficient * root * dseen_da;
+    return out;
+  }
+
+  // Swamee's submergence factor F = D / (0.32 S + D), D = head^0.7, S = (y_lc - y1)^0.7.
+  const double margin = y_lc - y1;
+  const double D = std::pow(head, submergence_exponent);
+  const double S = std::pow(margin, submergence_exponent);
+  const double den = submergence_weight * S + D;
+  const double F = D / den;
+  const double dF_dD = submergence_weight * S / (den * den);
+  const double dF_dS = -submergence_weight * D / (den * den);
+  const double dD_dhead = submergence_exponent * floored_power(head, submergence_exponent - 1.0, floor);
+  const double dS_dmargin =
+      submergence_exponent * floored_power(margin, submergence_exponent - 1.0, floor);
+  const double dylc_dy3 = (1.0 + border_exponent) * y_lc / y3;
+  const double dylc_dseen = -border_exponent * y_lc / a_seen;
+
+  const double dF_dy1 = dF_dD * dD_dhead + dF_dS * dS_dmargin * (dylc_dseen * dseen_dy1 - 1.0);
+  const double dF_dy3 = -dF_dD * dD_dhead + dF_dS * dS_dmargin * dylc_dy3;
+  const double dF_da = dF_dS * dS_dmargin * dylc_dseen * dseen_da;
+
+  out.q = qf * F;
+  out.d_y1 = dqf_dy1 * F + qf * dF_dy1;
+  out.d_y3 = qf * dF_dy3;
+  out.d_a = dqf_da * F + qf * dF_da;
+  return out;
+}
+
+GateFlow SluiceGate::evaluate(double y1, double y3, double a) const {
+  GateFlow flow;
+  flow.reverse = y3 > y1;
+  if (!flow.reverse) {
+    const Partials p = forward(y1, y3, a, flow.regime);
+    flow.q = p.q;
+    flow.dq_dy1 = p.d_y1;
+    flow.dq_dy3 = p.d_y3;
+    flow.dq_da = p.d_a;
+    return flow;
+  }
+  // Reverse head: q(y1, y3, a) = -Q(y3, y1, a), so the roles of the partials swap too.
+  const Partials p = forward(y3, y1, a, flow.regime);
+  flow.q = -p.q;
+  flow.dq_dy1 = -p.d_y3;
+  flow.dq_dy3 = -p.d_y1;
+  flow.dq_da = -p.d_a;
+  return flow;
+}
+
+}  // namespace canalsim::gates

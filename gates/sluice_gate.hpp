@@ -1,0 +1,149 @@
+// Sluice-gate discharge laws, flow-regime conditions and their derivatives.
+//
+// Notation (per unit width, SI units): y1 upstream depth [m], y3 depth downstream of the gate
+// (tailwater, after the jump) [m], a gate opening [m], q discharge per unit width [m^2/s],
+// g gravity [m/s^2]. Multiply q by the gate width b for the discharge in m^3/s.
+//
+// Swamee (1992), "Sluice-gate discharge equations", J. Irrig. Drain. Eng. 118(1), 56-60:
+//
+//   free flow        q_f = 0.864 a sqrt(g y1) ((y1 - a) / (y1 + 15 a))^0.072
+//   submerged flow   q_s = q_f (y1 - y3)^0.7 / [ 0.32 (y_lc - y1)^0.7 + (y1 - y3)^0.7 ]
+//   with the limit   y_lc = 0.81 y3 (y3 / a)^0.72                    (paper eq. 23)
+//
+// The published form of the free law is q = Cd a sqrt(2 g y1) with
+// Cd = 0.611 ((y1 - a)/(y1 + 15 a))^0.072 (0.864 = 0.611 sqrt 2). The flow is free when
+// y1 > y_lc (paper condition 8) and submerged when y3 < y1 < y_lc (paper condition 10). At the
+// border y1 = y_lc the bracket's first term vanishes, so q_s = q_f: the law is continuous there.
+// Its slope is not: d q_s / d y1 ~ (y_lc - y1)^-0.3 is unbounded at the border, and
+// d q_s / d y1 ~ (y1 - y3)^-0.3 at zero head (the simple law eq. 11 behaves like (y1-y3)^-0.5).
+//
+// The paper's (Gharab, Feliu-Batlle & Rivas-Perez 2019) simpler laws, selectable for comparison:
+//
+//   free flow        q_f = Cd a sqrt(2 g y1)                              (paper eq. 9)
+//   submerged flow   q_s = Cd a sqrt(2 g (y1 - y3))                       (paper eq. 11)
+//
+// with Cd = 0.6 and the same regime conditions (8)/(10); these jump at the regime border.
+//
+// Extensions beyond the published laws, each chosen so that q stays continuous:
+// - Reverse head (y3 > y1): the law is applied with the roles of the two sides swapped and the
+//   sign of q reversed, so q(y1, y3, a) = -q(y3, y1, a) exactly.
+// - Closed gate (a <= 0 and no leakage): a wall, q = 0.
+// - Leakage: the law sees the opening max(a, 0) + leakage_opening, so a "closed" gate with
+//   leakage passes the flow of a small opening.
+// - Gate lifted out of the water (a >= y1 on the upstream side): the gate no longer controls and
+//   the section passes critical flow for the upstream energy. We take the energy as the upstream
+//   depth (velocity head neglected, as the gate laws themselves do), so y_c = 2/3 y1 and
+//   q_c = sqrt(g) y_c^{3/2} = 0.5443 sqrt(g) y1^{3/2}.
+//   Swamee's free law is y1^{3/2} sqrt(g) f(a/y1) with f(r) = 0.864 r ((1-r)/(1+15r))^0.072,
+//   which rises to a maximum f = 0.54611 at r = 0.928 and then falls to 0 at r = 1 (outside the
+//   range the law was fitted on). Because the maximum exceeds 0.5443 by 0.33 %, the law meets
+//   critical flow at r_c = 0.9057 (see critical_opening_ratio()); above that opening we freeze the
+//   opening the law sees at r_c y1. The result is continuous in y1, y3 and a, with a kink at
+//   a = r_c y1, and equal to q_c for a >= y1. If the discharge-coefficient multiplier is so small
+//   that the scaled law never reaches critical flow (multiplier < 0.99675 = 0.5443/0.5461 for Swamee), the
+//   opening is frozen at the law's maximum instead and q jumps up to q_c when the gate leaves the
+//   water: the jump is q_c - m f_max sqrt(g) y1^{3/2}, i.e. (0.5443 - 0.5461 m)/0.5443 relative
+//   (0.2 % at m = 0.995, 10 % at m = 0.9).
+//   The simple law reaches critical flow at r_c = 0.5443 / (m Cd sqrt 2) (0.641 for Cd = 0.6).
+//   Drowned flow with the gate out of the water keeps the submergence factor evaluated with the
+//   frozen opening, which is again continuous.
+#pragma once
+
+#include <string>
+
+namespace canalsim::gates {
+
+inline constexpr double standard_gravity = 9.81;  // m/s^2
+
+enum class GateLaw {
+  swamee,  // Swamee (1992), continuous across the regime border (default)
+  simple,  // paper eq. 9 (free) and eq. 11 (submerged) with a constant Cd
+};
+
+// Regime of the flow through a gate, by the paper's conditions (8) and (10).
+enum class GateRegime {
+  closed,        // opening <= 0 or no water on the upstream side: no flow
+  free,          // condition (8): y_up > y_lc
+  submerged,     // condition (10): y_dwe <= y_up <= y_lc (includes zero head)
+  out_of_water,  // the gate is above the upstream surface (a >= y_up): critical flow
+};
+
+const char* to_string(GateLaw law);
+const char* to_string(GateRegime regime);
+
+struct SluiceGateOptions {
+  GateLaw law = GateLaw::swamee;
+  // Multiplies the discharge coefficient of the law (1 = as published). Diagnosis scales it to
+  // explain a gain mismatch. Range (0, 10].
+  double discharge_coefficient_multiplier = 1.0;
+  // Cd of the simple laws (paper eq. 9 and 11; "generally close to 0.6"). Range (0, 2].
+  double simple_discharge_coefficient = 0.6;
+  // Extra opening that leaks under a closed gate [m]. Range [0, 1].
+  double leakage_opening = 0.0;
+  double gravity = standard_gravity;  // m/s^2, range (0, 100]
+
+  // Empty when the options are valid; otherwise one line naming the field and its allowed range.
+  [[nodiscard]] std::string validate() const;
+};
+
+// Discharge per unit width and its partial derivatives (for the Newton solve of the face state).
+struct GateFlow {
+  double q = 0.0;       // m^2/s, positive from side 1 to side 3
+  double dq_dy1 = 0.0;  // d q / d y1   [m/s]
+  double dq_dy3 = 0.0;  // d q / d y3   [m/s]
+  double dq_da = 0.0;   // d q / d a    [m/s]
+  GateRegime regime = GateRegime::closed;
+  bool reverse = false;  // the flow goes from side 3 to side 1 (y3 > y1)
+};
+
+// Paper eq. (23): the upstream level at the free/submerged border,
+// y_lc = 0.81 y_dwe (y_dwe / x_up)^0.72. Returns +infinity for a closed gate (x_up <= 0) and 0
+// for a dry downstream side (y_dwe <= 0).
+double limit_condition_level(double y_dwe, double x_up);
+
+// The paper's conditions (8)/(10) applied in the direction of the head: with y_up >= y_dwe,
+// free when y_up > y_lc(y_dwe, x_up), submerged otherwise; with y_dwe > y_up the roles are
+// swapped (reverse flow). A gate at or above the upstream surface is out_of_water; x_up <= 0 or a
+// dry upstream side is closed.
+GateRegime classify_regime(double y_up, double y_dwe, double x_up);
+
+// Swamee's free-flow law alone, per unit width, for 0 < a < y1 (0 outside).
+double swamee_free_discharge(double y1, double a, double gravity = standard_gravity);
+
+// Critical flow per unit width for the upstream energy taken as the depth y1:
+// q_c = sqrt(g) (2/3 y1)^{3/2}.
+double critical_discharge(double y1, double gravity = standard_gravity);
+
+// A sluice-gate law with its options validated and its constants precomputed. Evaluation is a
+// pure function of (y1, y3, a): no state changes, safe to call from several threads.
+class SluiceGate {
+ public:
+  SluiceGate() : SluiceGate(SluiceGateOptions{}) {}
+  // Throws std::invalid_argument with validate()'s message when the options are invalid.
+  explicit SluiceGate(const SluiceGateOptions& options);
+
+  // Discharge per unit width [m^2/s], signed (positive from side 1 to side 3).
+  double discharge(double y1, double y3, double a) const { return evaluate(y1, y3, a).q; }
+  // Discharge, analytic partial derivatives, regime and direction.
+  GateFlow evaluate(double y1, double y3, double a) const;
+
+  // Opening ratio a / y_up above which the law sees a frozen opening (see the header comment).
+  double critical_opening_ratio() const { return cap_ratio_; }
+  // Whether the (scaled) law reaches critical flow continuously; false means q jumps when the
+  // gate leaves the water.
+  bool reaches_critical_flow() const { return reaches_critical_; }
+  const SluiceGateOptions& options() const { return options_; }
+
+ private:
+  struct Partials {
+    double q = 0.0, d_y1 = 0.0, d_y3 = 0.0, d_a = 0.0;
+  };
+  Partials forward(double y1, double y3, double a, GateRegime& regime) const;
+  Partials free_flow(double y1, double a_seen) const;
+
+  SluiceGateOptions options_;
+  double cap_ratio_ = 1.0;
+  bool reaches_critical_ = true;
+};
+
+}  // namespace canalsim::gates

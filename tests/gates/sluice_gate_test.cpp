@@ -1,0 +1,396 @@
+// Sluice-gate laws (gates/sluice_gate.*): Swamee (1992) free and submerged flow, the paper's
+// simple laws (eq. 9, 11), regime conditions (8)/(10), y_lc of eq. (23), and the derivatives the
+// gate-to-solver Newton coupling uses.
+#include "gates/sluice_gate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <gtest/gtest.h>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+namespace canalsim::gates {
+namespace {
+
+constexpr double g = 9.81;
+
+SluiceGate simple_gate() {
+  SluiceGateOptions options;
+  options.law = GateLaw::simple;
+  return SluiceGate(options);
+}
+
+// The tailwater depth y3 at which y_lc(y3, a) = y1 (the regime border), by bisection.
+double border_tailwater(double y1, double a) {
+  double lo = 1e-9, hi = y1;  // y_lc grows with y3
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (limit_condition_level(mid, a) < y1 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// The opening a at which y_lc(y3, a) = y1, by bisection (y_lc falls as a grows).
+double border_opening(double y1, double y3) {
+  double lo = 1e-6, hi = y1;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (limit_condition_level(y3, mid) > y1 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// --- values ----------------------------------------------------------------------------------
+
+TEST(SwameeFreeFlow, MatchesHandComputedValues) {
+  // q = 0.864 a sqrt(g y1) ((y1 - a)/(y1 + 15 a))^0.072 evaluated by hand (Python, g = 9.81).
+  const SluiceGate gate;
+  EXPECT_NEAR(gate.discharge(0.06, 0.0, 0.025), 0.013821830178676593, 1e-15);
+  EXPECT_NEAR(gate.discharge(0.06, 0.0, 0.015), 0.008705577808299024, 1e-15);
+  EXPECT_NEAR(gate.discharge(0.06, 0.0, 0.045), 0.022539395663937162, 1e-15);
+  EXPECT_NEAR(gate.discharge(1.0, 0.0, 0.2), 0.48200595245369315, 1e-13);
+}
+
+TEST(SwameeFreeFlow, AgreesWithThePublishedDischargeCoefficientForm) {
+  // Swamee's paper writes q = Cd a sqrt(2 g y1), Cd = 0.611 ((y1 - a)/(y1 + 15 a))^0.072.
+  // 0.611 sqrt(2) = 0.86408, not exactly 0.864, so the two forms agree to 1e-4 relative.
+  const SluiceGate gate;
+  for (double y1 : {0.03, 0.06, 0.2, 1.5}) {
+    for (double ratio : {0.05, 0.2, 0.4, 0.6, 0.8}) {
+      const double a = ratio * y1;
+      const double cd = 0.611 * std::pow((y1 - a) / (y1 + 15.0 * a), 0.072);
+      const double published = cd * a * std::sqrt(2.0 * g * y1);
+      EXPECT_NEAR(gate.discharge(y1, 0.0, a), published, 1.2e-4 * published) << y1 << ' ' << a;
+    }
+  }
+}
+
+TEST(SwameeFreeFlow, TailwaterBelowTheLimitDoesNotChangeTheDischarge) {
+  const SluiceGate gate;
+  const double y1 = 0.06, a = 0.04;
+  const double y3_border = border_tailwater(y1, a);
+  const double q0 = gate.discharge(y1, 0.0, a);
+  for (double y3 : {0.001, 0.01, 0.5 * y3_border, 0.999 * y3_border}) {
+    EXPECT_EQ(gate.discharge(y1, y3, a), q0);
+    EXPECT_EQ(gate.evaluate(y1, y3, a).regime, GateRegime::free);
+  }
+}
+
+TEST(SwameeSubmergedFlow, MatchesHandComputedFactor) {
+  const SluiceGate gate;
+  const double y1 = 0.06, y3 = 0.045, a = 0.02;
+  const double y_lc = 0.81 * y3 * std::pow(y3 / a, 0.72);
+  ASSERT_GT(y_lc, y1);
+  const double factor = std::pow(y1 - y3, 0.7) /
+                        (0.32 * std::pow(y_lc - y1, 0.7) + std::pow(y1 - y3, 0.7));
+  EXPECT_NEAR(gate.discharge(y1, y3, a), swamee_free_discharge(y1, a) * factor, 1e-16);
+  EXPECT_EQ(gate.evaluate(y1, y3, a).regime, GateRegime::submerged);
+}
+
+TEST(SimpleLaws, FreeFlowIsPaperEquation9) {
+  // q = 0.6 a sqrt(2 g y1) = 0.6 * 0.025 * sqrt(2 * 9.81 * 0.06), by hand.
+  EXPECT_NEAR(simple_gate().discharge(0.06, 0.0, 0.025), 0.01627482718802261, 1e-15);
+}
+
+TEST(SimpleLaws, SubmergedFlowIsPaperEquation11) {
+  // y_lc(0.045, 0.02) = 0.0887 > 0.06: submerged; q = 0.6 * 0.02 * sqrt(2 * 9.81 * 0.015).
+  EXPECT_NEAR(simple_gate().discharge(0.06, 0.045, 0.02), 0.006509930875209045, 1e-15);
+}
+
+TEST(SimpleLaws, JumpAtTheRegimeBorderUnlikeSwamee) {
+  // The paper's laws switch from sqrt(y1) to sqrt(y1 - y3) at the border: a finite jump.
+  const double y1 = 0.06, a = 0.03;
+  const double y3 = border_tailwater(y1, a);
+  const SluiceGate simple = simple_gate();
+  const double below = simple.discharge(y1, y3 - 1e-9, a);
+  const double above = simple.discharge(y1, y3 + 1e-9, a);
+  EXPECT_GT(std::abs(below - above) / below, 0.1);
+}
+
+TEST(DischargeMultiplier, ScalesTheLawLinearlyBelowTheSurface) {
+  SluiceGateOptions options;
+  options.discharge_coefficient_multiplier = 0.9;
+  const SluiceGate scaled(options);
+  const SluiceGate nominal;
+  for (double y3 : {0.0, 0.045, 0.055}) {
+    EXPECT_NEAR(scaled.discharge(0.06, y3, 0.02), 0.9 * nominal.discharge(0.06, y3, 0.02), 1e-16);
+  }
+}
+
+// --- regimes, y_lc ---------------------------------------------------------------------------
+
+TEST(LimitCondition, IsPaperEquation23) {
+  // 0.81 * 0.04 * (0.04 / 0.02)^0.72, by hand.
+  EXPECT_NEAR(limit_condition_level(0.04, 0.02), 0.053368697918938744, 1e-16);
+  EXPECT_TRUE(std::isinf(limit_condition_level(0.04, 0.0)));
+  EXPECT_EQ(limit_condition_level(0.0, 0.02), 0.0);
+}
+
+TEST(ClassifyRegime, FollowsConditions8And10) {
+  // y_lc(0.04, 0.02) = 53.4 mm.
+  EXPECT_EQ(classify_regime(0.060, 0.040, 0.020), GateRegime::free);       // 60 > 53.4
+  EXPECT_EQ(classify_regime(0.050, 0.040, 0.020), GateRegime::submerged);  // 40 < 50 < 53.4
+  EXPECT_EQ(classify_regime(0.040, 0.050, 0.020), GateRegime::submerged);  // reverse head
+  EXPECT_EQ(classify_regime(0.060, 0.040, 0.0), GateRegime::closed);
+  EXPECT_EQ(classify_regime(0.060, 0.040, 0.070), GateRegime::out_of_water);
+}
+
+TEST(ClassifyRegime, AgreesWithTheRegimeTheLawUses) {
+  const SluiceGate gate;
+  for (double y3 = 0.005; y3 < 0.06; y3 += 0.0025) {
+    for (double a = 0.005; a < 0.05; a += 0.0025) {
+      EXPECT_EQ(gate.evaluate(0.06, y3, a).regime, classify_regime(0.06, y3, a)) << y3 << ' ' << a;
+    }
+  }
+}
+
+// --- continuity ------------------------------------------------------------------------------
+
+// Largest relative change of q between neighbouring points of a fine sweep of one variable.
+template <class Discharge>
+double max_relative_step(Discharge q, double from, double to, int points) {
+  double worst = 0.0;
+  double previous = q(from);
+  for (int i = 1; i <= points; ++i) {
+    const double next = q(from + (to - from) * i / points);
+    worst = std::max(worst, std::abs(next - previous) / std::abs(previous));
+    previous = next;
+  }
+  return worst;
+}
+
+TEST(SwameeContinuity, DischargeIsContinuousWhenTheTailwaterCrossesTheBorder) {
+  const SluiceGate gate;
+  const double y1 = 0.06, a = 0.03;
+  const double y3 = border_tailwater(y1, a);
+  const double q_border = gate.discharge(y1, y3, a);
+  // Approaching the border from the submerged side, the gap closes like delta^0.7.
+  double previous_gap = 1.0;
+  for (double delta : {1e-5, 1e-7, 1e-9, 1e-11}) {
+    const double gap = std::abs(gate.discharge(y1, y3 + delta, a) - q_border) / q_border;
+    EXPECT_LT(gap, 0.03 * std::pow(delta / 1e-5, 0.7) + 1e-13) << delta;
+    EXPECT_LT(gap, previous_gap);
+    previous_gap = gap;
+  }
+  EXPECT_LT(previous_gap, 1e-6);
+  // A sweep of 1 mm either side in steps of 1e-8 m (100 nm): no step changes q by more than
+  // the Hölder-0.7 bound of one step.
+  const auto q_of_y3 = [&](double t) { return gate.discharge(y1, t, a); };
+  EXPECT_LT(max_relative_step(q_of_y3, y3 - 1e-3, y3 + 1e-3, 200000), 2e-4);
+}
+
+TEST(SwameeContinuity, DischargeIsContinuousWhenTheOpeningCrossesTheBorder) {
+  const SluiceGate gate;
+  const double y1 = 0.06, y3 = 0.040;
+  const double a_border = border_opening(y1, y3);
+  ASSERT_GT(a_border, 0.01);  // 17 mm
+  ASSERT_LT(a_border, 0.03);
+  EXPECT_EQ(gate.evaluate(y1, y3, a_border - 1e-4).regime, GateRegime::submerged);
+  EXPECT_EQ(gate.evaluate(y1, y3, a_border + 1e-4).regime, GateRegime::free);
+  const auto q_of_a = [&](double t) { return gate.discharge(y1, y3, t); };
+  EXPECT_LT(max_relative_step(q_of_a, a_border - 1e-3, a_border + 1e-3, 200000), 2e-4);
+  const double q_border = gate.discharge(y1, y3, a_border);
+  EXPECT_LT(std::abs(gate.discharge(y1, y3, a_border - 1e-11) - q_border) / q_border, 1e-6);
+}
+
+TEST(SwameeContinuity, DischargeIsContinuousAtZeroHead) {
+  const SluiceGate gate;
+  // q ~ head^0.7 near zero head: 1e-12 m of head passes ~1e-7 of the free discharge.
+  const double q_free = gate.discharge(0.05, 0.0, 0.02);
+  EXPECT_EQ(gate.discharge(0.05, 0.05, 0.02), 0.0);
+  EXPECT_LT(std::abs(gate.discharge(0.05, 0.05 - 1e-12, 0.02)), 1e-6 * q_free);
+  EXPECT_LT(std::abs(gate.discharge(0.05, 0.05 + 1e-12, 0.02)), 1e-6 * q_free);
+  EXPECT_LT(gate.discharge(0.05, 0.05 + 1e-12, 0.02), 0.0);
+}
+
+TEST(GateOutOfWater, PassesCriticalFlowOfTheUpstreamDepth) {
+  const SluiceGate gate;
+  // q_c = sqrt(g) (2/3 y1)^1.5 at y1 = 0.06, by hand.
+  EXPECT_NEAR(critical_discharge(0.06), 0.02505673562138532, 1e-15);
+  for (double a : {0.06, 0.07, 0.5}) {
+    const GateFlow flow = gate.evaluate(0.06, 0.01, a);
+    EXPECT_NEAR(flow.q, 0.02505673562138532, 1e-12) << a;
+    EXPECT_EQ(flow.regime, GateRegime::out_of_water);
+  }
+}
+
+TEST(GateOutOfWater, SwameeLawMeetsCriticalFlowContinuouslyBelowTheSurface) {
+  const SluiceGate gate;
+  EXPECT_TRUE(gate.reaches_critical_flow());
+  EXPECT_NEAR(gate.critical_opening_ratio(), 0.90572, 1e-5);  // bisection in Python
+  const double y1 = 0.06;
+  const auto q_of_a = [&](double t) { return gate.discharge(y1, 0.0, t); };
+  // Sweep the opening from 0.5 y1 to 1.2 y1 through the kink and the surface.
+  EXPECT_LT(max_relative_step(q_of_a, 0.5 * y1, 1.2 * y1, 70000), 1e-4);
+}
+
+TEST(GateOutOfWater, ReducedCoefficientJumpsByTheDocumentedAmount) {
+  SluiceGateOptions options;
+  options.discharge_coefficient_multiplier = 0.9;
+  const SluiceGate gate(options);
+  EXPECT_FALSE(gate.reaches_critical_flow());
+  const double y1 = 0.06;
+  const double below = gate.discharge(y1, 0.0, y1 - 1e-9);
+  const double above = gate.discharge(y1, 0.0, y1);
+  // Header comment: (0.5443 - 0.5461 m) / 0.5443 relative, 10 % at m = 0.9.
+  EXPECT_NEAR((above - below) / above, (0.54433 - 0.9 * 0.54611) / 0.54433, 1e-4);
+}
+
+TEST(SimpleLaws, ReachCriticalFlowAtTheDocumentedOpeningRatio) {
+  const SluiceGate gate = simple_gate();
+  EXPECT_NEAR(gate.critical_opening_ratio(), std::pow(2.0 / 3.0, 1.5) / (0.6 * std::sqrt(2.0)),
+              1e-12);
+  EXPECT_NEAR(gate.discharge(0.06, 0.0, 0.059), critical_discharge(0.06), 1e-14);
+}
+
+// --- monotonicity, symmetry, closed gate ------------------------------------------------------
+
+TEST(Monotonicity, DischargeGrowsWithOpeningAndUpstreamDepthAndFallsWithTailwater) {
+  for (const GateLaw law : {GateLaw::swamee, GateLaw::simple}) {
+    SluiceGateOptions options;
+    options.law = law;
+    const SluiceGate gate(options);
+    for (double y1 = 0.02; y1 <= 0.1; y1 += 0.005) {
+      for (double y3 = 0.0; y3 < y1; y3 += 0.004) {
+        for (double a = 0.001; a <= 0.12; a += 0.001) {
+          const double q = gate.discharge(y1, y3, a);
+          const double tol = 1e-15;
+          EXPECT_GE(gate.discharge(y1, y3, a + 0.0005), q - tol) << y1 << ' ' << y3 << ' ' << a;
+          if (law == GateLaw::swamee) {  // the simple laws jump down at the border in y1, y3
+            EXPECT_GE(gate.discharge(y1 + 0.0005, y3, a), q - tol) << y1 << ' ' << y3 << ' ' << a;
+            EXPECT_LE(gate.discharge(y1, y3 + 0.0005, a), q + tol) << y1 << ' ' << y3 << ' ' << a;
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(ReverseHead, GivesReverseFlowThatIsExactlyAntisymmetric) {
+  const SluiceGate gate;
+  for (double a : {0.01, 0.03, 0.08}) {
+    for (double y3 : {0.0, 0.03, 0.05}) {
+      const GateFlow forward = gate.evaluate(0.06, y3, a);
+      const GateFlow backward = gate.evaluate(y3, 0.06, a);
+      EXPECT_EQ(backward.q, -forward.q);
+      EXPECT_EQ(backward.dq_dy1, -forward.dq_dy3);
+      EXPECT_EQ(backward.dq_dy3, -forward.dq_dy1);
+      EXPECT_EQ(backward.dq_da, -forward.dq_da);
+      EXPECT_TRUE(backward.reverse);
+      EXPECT_FALSE(forward.reverse);
+    }
+  }
+}
+
+TEST(ClosedGate, IsAWall) {
+  const SluiceGate gate;
+  for (double a : {0.0, -0.01}) {
+    const GateFlow flow = gate.evaluate(0.06, 0.02, a);
+    EXPECT_EQ(flow.q, 0.0);
+    EXPECT_EQ(flow.dq_dy1, 0.0);
+    EXPECT_EQ(flow.dq_dy3, 0.0);
+    EXPECT_EQ(flow.dq_da, 0.0);
+    EXPECT_EQ(flow.regime, GateRegime::closed);
+  }
+  EXPECT_EQ(gate.discharge(0.0, 0.0, 0.02), 0.0);  // dry on both sides
+}
+
+TEST(Leakage, ClosedGateLeaksAsASmallOpening) {
+  SluiceGateOptions options;
+  options.leakage_opening = 0.001;
+  const SluiceGate leaky(options);
+  const SluiceGate tight;
+  EXPECT_NEAR(leaky.discharge(0.06, 0.02, 0.0), tight.discharge(0.06, 0.02, 0.001), 1e-16);
+  EXPECT_NEAR(leaky.discharge(0.06, 0.02, 0.01), tight.discharge(0.06, 0.02, 0.011), 1e-16);
+  EXPECT_GT(leaky.discharge(0.06, 0.02, 0.0), 0.0);
+}
+
+// --- derivatives -----------------------------------------------------------------------------
+
+struct Point {
+  double y1, y3, a;
+};
+
+// Points away from the kinks (regime border, opening cap, zero head) where central differences
+// with step h are meaningful.
+std::vector<Point> smooth_points(const SluiceGate& gate, int count) {
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> depth(0.005, 0.12), opening(0.001, 0.15);
+  std::vector<Point> points;
+  while (static_cast<int>(points.size()) < count) {
+    const Point p{depth(rng), depth(rng), opening(rng)};
+    const double high = std::max(p.y1, p.y3), low = std::min(p.y1, p.y3);
+    const double a_seen = std::min(p.a, gate.critical_opening_ratio() * high);
+    const double y_lc = limit_condition_level(low, a_seen);
+    if (high - low < 1e-3) continue;                                  // zero head
+    if (std::abs(high - y_lc) < 1e-3) continue;                       // regime border
+    if (std::abs(p.a - gate.critical_opening_ratio() * high) < 1e-3) continue;  // cap kink
+    if (std::abs(p.a - high) < 1e-3) continue;                        // gate at the surface
+    points.push_back(p);
+  }
+  return points;
+}
+
+void expect_derivatives_match_central_differences(const SluiceGate& gate) {
+  const double h = 1e-7;
+  int regimes_seen[4] = {0, 0, 0, 0};
+  for (const Point& p : smooth_points(gate, 2000)) {
+    const GateFlow flow = gate.evaluate(p.y1, p.y3, p.a);
+    ++regimes_seen[static_cast<int>(flow.regime)];
+    const double d_y1 = (gate.discharge(p.y1 + h, p.y3, p.a) - gate.discharge(p.y1 - h, p.y3, p.a)) / (2 * h);
+    const double d_y3 = (gate.discharge(p.y1, p.y3 + h, p.a) - gate.discharge(p.y1, p.y3 - h, p.a)) / (2 * h);
+    const double d_a = (gate.discharge(p.y1, p.y3, p.a + h) - gate.discharge(p.y1, p.y3, p.a - h)) / (2 * h);
+    const double scale = std::abs(flow.dq_dy1) + std::abs(flow.dq_dy3) + std::abs(flow.dq_da) + 1e-12;
+    EXPECT_NEAR(flow.dq_dy1, d_y1, 1e-5 * scale) << p.y1 << ' ' << p.y3 << ' ' << p.a;
+    EXPECT_NEAR(flow.dq_dy3, d_y3, 1e-5 * scale) << p.y1 << ' ' << p.y3 << ' ' << p.a;
+    EXPECT_NEAR(flow.dq_da, d_a, 1e-5 * scale) << p.y1 << ' ' << p.y3 << ' ' << p.a;
+  }
+  EXPECT_GT(regimes_seen[static_cast<int>(GateRegime::free)], 50);
+  EXPECT_GT(regimes_seen[static_cast<int>(GateRegime::submerged)], 50);
+  EXPECT_GT(regimes_seen[static_cast<int>(GateRegime::out_of_water)], 50);
+}
+
+TEST(Derivatives, SwameeMatchCentralDifferencesInEveryRegime) {
+  expect_derivatives_match_central_differences(SluiceGate{});
+}
+
+TEST(Derivatives, SimpleLawsMatchCentralDifferencesInEveryRegime) {
+  expect_derivatives_match_central_differences(simple_gate());
+}
+
+TEST(Derivatives, ScaledLawWithLeakageMatchesCentralDifferences) {
+  SluiceGateOptions options;
+  options.discharge_coefficient_multiplier = 0.93;
+  options.leakage_opening = 0.0005;
+  expect_derivatives_match_central_differences(SluiceGate(options));
+}
+
+TEST(Derivatives, AreFiniteWithTheRightSignAtZeroHeadAndAtTheBorder) {
+  const SluiceGate gate;
+  const GateFlow zero_head = gate.evaluate(0.05, 0.05, 0.02);
+  EXPECT_TRUE(std::isfinite(zero_head.dq_dy1));
+  EXPECT_GT(zero_head.dq_dy1, 0.0);
+  EXPECT_LT(zero_head.dq_dy3, 0.0);
+  const double y3 = border_tailwater(0.06, 0.03);
+  const GateFlow border = gate.evaluate(0.06, y3 + 1e-12, 0.03);
+  EXPECT_TRUE(std::isfinite(border.dq_dy1));
+  EXPECT_GT(border.dq_dy1, 0.0);
+}
+
+// --- options ---------------------------------------------------------------------------------
+
+TEST(SluiceGateOptions, ValidationNamesTheFieldAndItsRange) {
+  SluiceGateOptions options;
+  EXPECT_EQ(options.validate(), "");
+  options.discharge_coefficient_multiplier = -1.0;
+  EXPECT_NE(options.validate().find("discharge_coefficient_multiplier: expected a value in (0, 10]"),
+            std::string::npos);
+  options = {};
+  options.leakage_opening = -0.1;
+  EXPECT_NE(options.validate().find("leakage_opening"), std::string::npos);
+  EXPECT_THROW(SluiceGate{options}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace canalsim::gates
