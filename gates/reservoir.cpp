@@ -39,8 +39,8 @@ std::string ReservoirOptions::validate() const {
         check("flow_per_hz", flow_per_hz, 0.0, 100.0, true, "m^3/s/Hz"),
         check("max_frequency", max_frequency, 0.0, 1000.0, true, "Hz"),
         check("proportional_gain", proportional_gain, 0.0, 1e9, false, "Hz/m"),
-        check("integral_gain", integral_gain, 0.0, 1e9, false, "Hz/(m s)"),
-        check("derivative_gain", derivative_gain, 0.0, 1e9, false, "Hz s/m"),
+        check("integral_time", integral_time, 0.0, 1e9, true, "s"),
+        check("derivative_time", derivative_time, 0.0, 1e6, false, "s"),
         check("tracking_time", tracking_time, 0.0, 1e6, true, "s")}) {
     if (!problem.empty()) return problem;
   }
@@ -74,7 +74,7 @@ void Reservoir::start_at_steady_state(double outflow) {
 }
 
 void Reservoir::update_integral(double dt, double error, double unsaturated) {
-  const double increment = options_.integral_gain * error * dt;
+  const double increment = options_.proportional_gain / options_.integral_time * error * dt;
   switch (options_.anti_windup) {
     case AntiWindup::none:
       integral_ += increment;
@@ -100,7 +100,7 @@ double Reservoir::advance(double dt, double outflow) {
   const double error = options_.setpoint - y;
   const double rate = (y - previous_level_) / dt;
   const double unsaturated =
-      options_.proportional_gain * error + integral_ - options_.derivative_gain * rate;
+      options_.proportional_gain * (error - options_.derivative_time * rate) + integral_;
   frequency_ = std::clamp(unsaturated, options_.min_frequency, options_.max_frequency);
   saturated_ = frequency_ != unsaturated;
   update_integral(dt, error, unsaturated);

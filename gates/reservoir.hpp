@@ -8,12 +8,14 @@
 //
 // with the pump flow proportional to its frequency f (k_q = flow_per_hz), and the controller
 //
-//   f_unsat = Kp e + I - Kd dy/dt,   e = y_set - y,   f = clamp(f_unsat, f_min, f_max)
+//   f_unsat = Kp (e + I - Td dy/dt),  dI/dt = e / Ti,  e = y_set - y,  f = clamp(f_unsat, f_min, f_max)
 //
-// (derivative on the measurement, so a setpoint change does not kick the pump). The integral I
+// (standard form with integral time Ti and derivative time Td, as the scenario keys pid_kp,
+// pid_ti_s, pid_td_s; derivative on the measurement, so a setpoint change does not kick the
+// pump). Internally the integral is kept in Hz, I_Hz = Kp I. The integral
 // is protected against windup while the pump saturates, either by conditional integration (I
 // stops while saturated and the error would drive it further into saturation) or by
-// back-calculation (dI/dt = Ki e + (f - f_unsat) / T_t; Astrom & Hagglund, Advanced PID
+// back-calculation (dI_Hz/dt = Kp e / Ti + (f - f_unsat) / T_t; Astrom & Hagglund, Advanced PID
 // Control, 2006, Sec. 3.5).
 //
 // advance(dt, Q_out) holds the pump frequency and the outflow constant over the step and
@@ -36,19 +38,20 @@ enum class AntiWindup {
 const char* to_string(AntiWindup scheme);
 
 // Defaults describe an assumed laboratory set-up (the paper gives only the 0-50 Hz range and the
-// 60 mm level): a 0.1 m^2 head tank, a pump of 3 L/s at 50 Hz, and gains that place the closed
-// loop A y'' + k_q Kp y' + k_q Ki y = 0 at a natural frequency of about 0.5 rad/s, critically
-// damped.
+// 60 mm level): a 0.05 m^2 head tank, a pump of 3 L/s at 50 Hz (the 45 mm operating point passes
+// about 1.8 L/s through the 80 mm gate), and gains that make the closed loop
+// A y'' + k_q Kp y' + (k_q Kp / Ti) y = 0 critically damped at about 0.4 rad/s
+// (k_q Kp / A = 0.84 = 2 zeta omega, omega^2 = 0.168).
 struct ReservoirOptions {
-  double plan_area = 0.1;                  // A [m^2], range (0, 1e6]
+  double plan_area = 0.05;                 // A [m^2], range (0, 1e6]
   double initial_level = 0.060;            // y(0) [m], range [0, 100]
   double setpoint = 0.060;                 // y_set [m], range [0, 100]
   double flow_per_hz = 6e-5;               // k_q [m^3/s per Hz], range (0, 100]
   double min_frequency = 0.0;              // f_min [Hz], range [0, max_frequency)
   double max_frequency = 50.0;             // f_max [Hz], range (min_frequency, 1000]
-  double proportional_gain = 1700.0;       // Kp [Hz/m], range [0, 1e9]
-  double integral_gain = 420.0;            // Ki [Hz/(m s)], range [0, 1e9]
-  double derivative_gain = 0.0;            // Kd [Hz s/m], range [0, 1e9]
+  double proportional_gain = 700.0;        // Kp [Hz/m], range [0, 1e9]
+  double integral_time = 5.0;              // Ti [s], range (0, 1e9]; 1e9 ~ no integral action
+  double derivative_time = 0.0;            // Td [s], range [0, 1e6]
   AntiWindup anti_windup = AntiWindup::back_calculation;
   double tracking_time = 1.0;              // T_t [s] for back-calculation, range (0, 1e6]
 
@@ -75,7 +78,7 @@ class Reservoir {
   double initial_volume() const { return initial_volume_; }
   double frequency() const { return frequency_; }       // pump frequency of the last step [Hz]
   double pump_flow() const { return frequency_ * options_.flow_per_hz; }  // [m^3/s]
-  double integral() const { return integral_; }         // controller integral state [Hz]
+  double integral() const { return integral_; }         // integral term Kp I [Hz]
   bool saturated() const { return saturated_; }
   double total_inflow() const { return total_inflow_; }    // cumulative pump volume [m^3]
   double total_outflow() const { return total_outflow_; }  // cumulative gate volume [m^3]

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <gtest/gtest.h>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 
 namespace canalsim::gates {
 namespace {
@@ -43,17 +45,17 @@ TEST(Reservoir, RejectsAnOutflowStep) {
   EXPECT_NEAR(tank.pump_flow(), 1.8e-3, 1e-8);
 }
 
-// Overshoot above the setpoint after the pump saturated for 20 s (outflow 3.5 L/s > 3 L/s max).
+// Overshoot above the setpoint after the pump saturated for 10 s (outflow 3.2 L/s > 3 L/s max).
 double overshoot_after_saturation(AntiWindup scheme, double* settled_level) {
   ReservoirOptions options;
   options.anti_windup = scheme;
   Reservoir tank(options);
   tank.start_at_steady_state(1.5e-3);
-  const auto demand = [](double t) { return t < 20.0 ? 3.5e-3 : 1.5e-3; };
+  const auto demand = [](double t) { return t < 10.0 ? 3.2e-3 : 1.5e-3; };
   double peak = 0.0;
-  run(tank, 0.0, 20.0, demand, nullptr);
+  run(tank, 0.0, 10.0, demand, nullptr);
   EXPECT_TRUE(tank.saturated());
-  run(tank, 20.0, 200.0, demand, &peak);
+  run(tank, 10.0, 200.0, demand, &peak);
   *settled_level = tank.level();
   return peak - options.setpoint;
 }
@@ -64,8 +66,7 @@ TEST(Reservoir, AntiWindupLimitsTheOvershootAfterSaturation) {
   const double conditional =
       overshoot_after_saturation(AntiWindup::conditional_integration, &settled_conditional);
   const double back = overshoot_after_saturation(AntiWindup::back_calculation, &settled_back);
-  // Measured: none 160 mm, conditional integration 2.9 mm, back-calculation none (it
-  // approaches the setpoint from below).
+  // Measured: none 67.8 mm, conditional integration 7.9 mm, back-calculation 1.7 mm.
   EXPECT_GT(none, 3.0 * conditional);
   EXPECT_GT(none, 3.0 * back);
   EXPECT_NEAR(settled_conditional, 0.060, 1e-5);
@@ -73,7 +74,7 @@ TEST(Reservoir, AntiWindupLimitsTheOvershootAfterSaturation) {
   RecordProperty("overshoot_none_mm", std::to_string(none * 1e3));
   RecordProperty("overshoot_conditional_mm", std::to_string(conditional * 1e3));
   RecordProperty("overshoot_back_calculation_mm", std::to_string(back * 1e3));
-  std::printf("overshoot after 20 s of saturation: none %.3f mm, conditional %.3f mm, "
+  std::printf("overshoot after 10 s of saturation: none %.3f mm, conditional %.3f mm, "
               "back-calculation %.3f mm\n", none * 1e3, conditional * 1e3, back * 1e3);
 }
 
