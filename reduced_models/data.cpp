@@ -1,0 +1,82 @@
+#include "reduced_models/data.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+namespace canalsim::reduced {
+namespace {
+
+std::string number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+std::string DataOptions::validate() const {
+  if (upstream_level_mm && !(std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0)) {
+    return "DataOptions.upstream_level_mm: " + number(*upstream_level_mm) +
+           ", expected a positive level in mm";
+  }
+  if (u0_mm && !std::isfinite(*u0_mm)) return "DataOptions.u0_mm: expected a finite value";
+  if (y0_mm && !std::isfinite(*y0_mm)) return "DataOptions.y0_mm: expected a finite value";
+  if (rest_samples_max < 1) return "DataOptions.rest_samples_max: expected at least 1";
+  if (!(min_excitation_mm >= 0.0)) return "DataOptions.min_excitation_mm: expected >= 0";
+  return "";
+}
+
+ExperimentData prepare_data(const Recording& recording, const DataOptions& options) {
+  const std::string source = recording.source.empty() ? "recording" : recording.source;
+  if (const auto why = options.validate(); !why.empty()) throw InputError(source + ": " + why);
+  ExperimentData d;
+  d.source = source;
+  d.t_s = recording.column(columns::time);
+  d.u_mm = recording.column(columns::gate_command);
+  d.y_dwe_mm = recording.column(columns::level_downstream_end);
+  if (d.t_s.size() < 2) {
+    throw InputError(source + ": expected at least two samples, found " +
+                     std::to_string(d.t_s.size()));
+  }
+  d.h = recording.sample_period();
+  if (recording.has(columns::upstream_level)) {
+    d.y_up_mm = recording.column(columns::upstream_level);
+  } else if (options.upstream_level_mm) {
+    d.y_up_mm.assign(d.size(), *options.upstream_level_mm);
+    d.y_up_is_constant_option = true;
+  }
+  if (recording.has(columns::gate_position)) d.x_up_mm = recording.column(columns::gate_position);
+
+  const auto [umin, umax] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
+  if (*umax - *umin <= options.min_excitation_mm) {
+    throw InputError(source + ": u_mm is constant (" + number(*umin) +
+                     " mm): the input has no excitation, so no model can be identified "
+                     "(expected e.g. a PRBS around the operating point)");
+  }
+  d.u0_mm = options.u0_mm.value_or(d.u_mm.front());
+  if (options.y0_mm) {
+    d.y0_mm = *options.y0_mm;
+  } else {
+    std::size_t rest = 1;
+    while (rest < d.size() && rest < options.rest_samples_max && d.u_mm[rest] == d.u_mm[0]) ++rest;
+    d.y0_mm = std::accumulate(d.y_dwe_mm.begin(), d.y_dwe_mm.begin() + static_cast<long>(rest), 0.0) /
+              static_cast<double>(rest);
+  }
+  return d;
+}
+
+ExperimentData load_experiment(const std::string& file, const DataOptions& options) {
+  return prepare_data(read_recording(file), options);
+}
+
+void require_upstream_level(const ExperimentData& data, const std::string& model_name) {
+  if (!data.has_upstream_level()) {
+    throw InputError(data.source + ": model " + model_name +
+                     " needs the upstream level: the recording has no y_up_mm column (add it, "
+                     "or give a constant upstream level, e.g. --upstream-level 60)");
+  }
+}
+
+}  // namespace canalsim::reduced

@@ -1,0 +1,59 @@
+// Experiment data for the reduced models: a recording turned into the signals the models use,
+// with the operating point the paper's deviations (Δu, Δy_dwe) are taken from.
+//
+// Levels and gate openings stay in millimetres here, as in the recordings and the paper's
+// tables (gains are mm/mm, so nothing else depends on the unit); times are in seconds.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scenarios/recording.hpp"
+
+namespace canalsim::reduced {
+
+struct DataOptions {
+  // Upstream pool level to use when the recording has no y_up_mm column (the paper's lab
+  // canal regulated it at 60 mm). Without it, models that need y_up reject such recordings.
+  std::optional<double> upstream_level_mm;
+  // Operating point. By default u0 = u(0) and y0 = the mean of y_dwe over the samples before
+  // u first changes (at most `rest_samples_max` of them): the pool is at rest there.
+  std::optional<double> u0_mm;
+  std::optional<double> y0_mm;
+  std::size_t rest_samples_max = 50;
+  // An input whose range max(u) − min(u) is at most this carries no excitation (rejected).
+  double min_excitation_mm = 1e-6;
+
+  std::string validate() const;  // empty when valid, else one line naming the field
+};
+
+struct ExperimentData {
+  std::string source;             // file name, for messages and reports
+  double h = 0.0;                 // sampling period, s
+  std::vector<double> t_s;        // time, s
+  std::vector<double> u_mm;       // gate command u(t), absolute
+  std::vector<double> y_dwe_mm;   // recorded downstream-end level, absolute
+  std::vector<double> y_up_mm;    // upstream level (column or the constant option); may be empty
+  std::vector<double> x_up_mm;    // recorded gate position; empty when absent
+  double u0_mm = 0.0;             // operating point of the input
+  double y0_mm = 0.0;             // operating point of the output
+  bool y_up_is_constant_option = false;
+
+  std::size_t size() const { return u_mm.size(); }
+  double duration() const { return h * static_cast<double>(size()); }
+  bool has_upstream_level() const { return !y_up_mm.empty(); }
+};
+
+// Builds the experiment data from a recording that has already been read and validated
+// (read_recording rejects non-increasing / non-uniform time and NaN). Throws InputError naming
+// the recording when the input has no excitation or the options do not fit the data.
+ExperimentData prepare_data(const Recording& recording, const DataOptions& options = {});
+
+// Reads a recording and prepares it (the everyday entry point for files).
+ExperimentData load_experiment(const std::string& file, const DataOptions& options = {});
+
+// Throws InputError ("FILE: model M needs y_up_mm …") when `data` has no upstream level.
+void require_upstream_level(const ExperimentData& data, const std::string& model_name);
+
+}  // namespace canalsim::reduced

@@ -1,0 +1,306 @@
+#include "reduced_models/models.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace canalsim::reduced {
+namespace {
+
+std::string number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+double mean_free_head(const ExperimentData& d) {
+  double s = 0.0;
+  for (double v : d.y_up_mm) s += v;
+  return d.y_up_mm.empty() ? 0.0 : s / static_cast<double>(d.y_up_mm.size());
+}
+
+double mean_submerged_head(const ExperimentData& d) {
+  if (d.y_up_mm.empty()) return 0.0;
+  double s = 0.0;
+  for (std::size_t k = 0; k < d.size(); ++k) s += std::max(d.y_up_mm[k] - d.y_dwe_mm[k], 0.0);
+  return s / static_cast<double>(d.size());
+}
+
+bool uses_submerged_head(ModelKind kind) {
+  return kind == ModelKind::nliom_s || kind == ModelKind::nlfom_s;
+}
+
+}  // namespace
+
+std::string model_name(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::liom: return "liom";
+    case ModelKind::sopd: return "sopd";
+    case ModelKind::lfom: return "lfom";
+    case ModelKind::nliom_f: return "nliom-f";
+    case ModelKind::nlfom_f: return "nlfom-f";
+    case ModelKind::nliom_s: return "nliom-s";
+    case ModelKind::nlfom_s: return "nlfom-s";
+    case ModelKind::hybrid: return "hybrid";
+  }
+  return "?";
+}
+
+std::vector<ModelKind> all_model_kinds() {
+  return {ModelKind::liom,    ModelKind::sopd,    ModelKind::lfom,    ModelKind::nliom_f,
+          ModelKind::nlfom_f, ModelKind::nliom_s, ModelKind::nlfom_s, ModelKind::hybrid};
+}
+
+std::optional<ModelKind> parse_model_kind(const std::string& name) {
+  std::string key;
+  for (char ch : name) {
+    key += ch == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  }
+  for (auto kind : all_model_kinds()) {
+    if (model_name(kind) == key) return kind;
+  }
+  return std::nullopt;
+}
+
+bool is_fractional(ModelKind kind) {
+  return kind == ModelKind::lfom || kind == ModelKind::nlfom_f || kind == ModelKind::nlfom_s ||
+         kind == ModelKind::hybrid;
+}
+bool uses_upstream_level(ModelKind kind) {
+  return !(kind == ModelKind::liom || kind == ModelKind::sopd || kind == ModelKind::lfom);
+}
+bool uses_gamma(ModelKind kind) { return uses_upstream_level(kind); }
+bool is_linear_time_invariant(ModelKind kind) { return !uses_upstream_level(kind); }
+
+std::string Actuation::validate() const {
+  if (!(gate_speed_mm_s >= 0.0) || !std::isfinite(gate_speed_mm_s)) {
+    return "Actuation.gate_speed_mm_s: " + number(gate_speed_mm_s) + ", expected >= 0 (0 = off)";
+  }
+  if (!(quantum_mm >= 0.0) || !std::isfinite(quantum_mm)) {
+    return "Actuation.quantum_mm: " + number(quantum_mm) + ", expected >= 0 (0 = off)";
+  }
+  return "";
+}
+
+std::vector<std::string> parameter_names(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::liom: return {"K", "T", "L"};
+    case ModelKind::sopd: return {"K", "T", "T2", "L"};
+    case ModelKind::lfom: return {"K", "T", "lambda", "L"};
+    case ModelKind::nliom_f:
+    case ModelKind::nliom_s: return {"K", "T", "gamma", "L"};
+    case ModelKind::nlfom_f:
+    case ModelKind::nlfom_s: return {"K", "T", "lambda", "gamma", "L"};
+    case ModelKind::hybrid: return {"K", "T", "lambda", "gamma", "L", "K_sub", "gamma_sub"};
+  }
+  return {};
+}
+
+double get_parameter(const ModelParameters& p, const std::string& name) {
+  if (name == "K") return p.K;
+  if (name == "T") return p.T;
+  if (name == "T2") return p.T2;
+  if (name == "lambda") return p.lambda;
+  if (name == "gamma") return p.gamma;
+  if (name == "L") return p.L;
+  if (name == "K_sub") return p.K_sub;
+  if (name == "gamma_sub") return p.gamma_sub;
+  throw std::invalid_argument("unknown model parameter '" + name + "'");
+}
+
+void set_parameter(ModelParameters& p, const std::string& name, double value) {
+  if (name == "K") p.K = value;
+  else if (name == "T") p.T = value;
+  else if (name == "T2") p.T2 = value;
+  else if (name == "lambda") p.lambda = value;
+  else if (name == "gamma") p.gamma = value;
+  else if (name == "L") p.L = value;
+  else if (name == "K_sub") p.K_sub = value;
+  else if (name == "gamma_sub") p.gamma_sub = value;
+  else throw std::invalid_argument("unknown model parameter '" + name + "'");
+}
+
+std::string validate(const Model& model) {
+  const auto& p = model.p;
+  for (const auto& name : parameter_names(model.kind)) {
+    if (!std::isfinite(get_parameter(p, name))) return "parameter " + name + " is not finite";
+  }
+  if (!(p.T >= 0.0)) return "parameter T: " + number(p.T) + " s, expected >= 0";
+  if (model.kind == ModelKind::sopd && !(p.T2 >= 0.0)) {
+    return "parameter T2: " + number(p.T2) + " s, expected >= 0";
+  }
+  if (is_fractional(model.kind) && !(p.lambda > 0.0)) {
+    return "parameter lambda: " + number(p.lambda) + ", expected > 0";
+  }
+  if (!(p.L >= 0.0)) return "parameter L: " + number(p.L) + " s, expected >= 0";
+  if (!(p.head_ref_mm >= 0.0)) return "parameter head_ref_mm: expected >= 0 (0 = from data)";
+  if (!(p.head_ref_sub_mm >= 0.0)) return "parameter head_ref_sub_mm: expected >= 0";
+  return model.actuation.validate();
+}
+
+double free_flow_limit_mm(double y_dwe_mm, double x_up_mm) {
+  if (x_up_mm <= 0.0) return INFINITY;  // closed gate: never free flow
+  return 0.81 * y_dwe_mm * std::pow(std::max(y_dwe_mm, 0.0) / x_up_mm, 0.72);
+}
+
+bool is_free_flow(double y_up_mm, double y_dwe_mm, double x_up_mm) {
+  return y_up_mm > free_flow_limit_mm(y_dwe_mm, x_up_mm);
+}
+
+std::vector<double> rate_limit(const std::vector<double>& u_mm, double h, double speed_mm_s) {
+  std::vector<double> x(u_mm.size());
+  if (u_mm.empty()) return x;
+  if (speed_mm_s <= 0.0) return u_mm;
+  const double step = speed_mm_s * h;
+  x[0] = u_mm[0];
+  for (std::size_t k = 1; k < u_mm.size(); ++k) {
+    x[k] = x[k - 1] + std::clamp(u_mm[k] - x[k - 1], -step, step);
+  }
+  return x;
+}
+
+double quantise(double y, double r) { return r > 0.0 ? r * std::nearbyint(y / r) : y; }
+
+void set_head_references(Model& model, const std::vector<const ExperimentData*>& data) {
+  if (!uses_upstream_level(model.kind)) return;
+  auto mean_over = [&](double (*head)(const ExperimentData&)) {
+    double s = 0.0;
+    std::size_t n = 0;
+    for (const auto* d : data) {
+      if (!d->has_upstream_level()) continue;
+      s += head(*d) * static_cast<double>(d->size());
+      n += d->size();
+    }
+    return n ? s / static_cast<double>(n) : 0.0;
+  };
+  const bool submerged = uses_submerged_head(model.kind);
+  if (model.p.head_ref_mm == 0.0) {
+    model.p.head_ref_mm = mean_over(submerged ? mean_submerged_head : mean_free_head);
+  }
+  if (model.kind == ModelKind::hybrid && model.p.head_ref_sub_mm == 0.0) {
+    model.p.head_ref_sub_mm = mean_over(mean_submerged_head);
+  }
+  // A zero mean head (e.g. y_up below y_dwe throughout) would divide by zero: use 1 mm.
+  if (model.p.head_ref_mm <= 0.0) model.p.head_ref_mm = 1.0;
+  if (model.kind == ModelKind::hybrid && model.p.head_ref_sub_mm <= 0.0) model.p.head_ref_sub_mm = 1.0;
+}
+
+double paper_gain(const Model& model) {
+  if (!uses_gamma(model.kind)) return model.p.K;
+  return model.p.K / std::pow(model.p.head_ref_mm, model.p.gamma);
+}
+
+void fractional_delay(const std::vector<double>& x, double delay_samples, std::vector<double>& out) {
+  const std::size_t n = x.size();
+  out.assign(n, 0.0);
+  const double whole = std::floor(delay_samples);
+  const double frac = delay_samples - whole;
+  const auto d = static_cast<std::ptrdiff_t>(whole);
+  // out[k] = (1 − frac) x[k − d] + frac x[k − d − 1]
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(k) - d;
+    double v = 0.0;
+    if (i >= 0 && i < static_cast<std::ptrdiff_t>(n)) v += (1.0 - frac) * x[static_cast<std::size_t>(i)];
+    if (i - 1 >= 0 && i - 1 < static_cast<std::ptrdiff_t>(n)) v += frac * x[static_cast<std::size_t>(i - 1)];
+    out[k] = v;
+  }
+}
+
+std::vector<double> delayed_input(const ExperimentData& data, const Actuation& actuation, double L) {
+  std::vector<double> du = rate_limit(data.u_mm, data.h, actuation.gate_speed_mm_s);
+  for (double& v : du) v -= data.u0_mm;
+  std::vector<double> out;
+  fractional_delay(du, L / data.h, out);
+  return out;
+}
+
+SimulationResult simulate(const Model& model_in, const ExperimentData& data,
+                          const SimulationOptions& options) {
+  if (const auto why = validate(model_in); !why.empty()) {
+    throw std::invalid_argument("simulate " + model_name(model_in.kind) + ": " + why);
+  }
+  if (const auto why = options.validate(); !why.empty()) throw std::invalid_argument(why);
+  Model model = model_in;
+  const ModelKind kind = model.kind;
+  if (uses_upstream_level(kind)) {
+    require_upstream_level(data, model_name(kind));
+    set_head_references(model, {&data});
+  }
+  const auto& p = model.p;
+  const std::size_t n = data.size();
+  const double h = data.h;
+  const auto dud = delayed_input(data, model.actuation, p.L);
+  SimulationResult result;
+  std::vector<double> x(n, 0.0);
+  const double lambda = is_fractional(kind) ? p.lambda : 1.0;
+
+  switch (kind) {
+    case ModelKind::liom:
+    case ModelKind::lfom: {
+      const OnlineForcing f = [&](std::size_t k, const double*) { return p.K * dud[k]; };
+      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
+      break;
+    }
+    case ModelKind::sopd: {
+      std::vector<double> x1(n);
+      const OnlineForcing f1 = [&](std::size_t k, const double*) { return p.K * dud[k]; };
+      solve_fractional_lag(n, p.T, 1.0, h, options.gl, f1, x1.data());
+      const OnlineForcing f2 = [&](std::size_t k, const double*) { return x1[k]; };
+      solve_fractional_lag(n, p.T2, 1.0, h, options.gl, f2, x.data());
+      break;
+    }
+    case ModelKind::nliom_f:
+    case ModelKind::nlfom_f: {
+      std::vector<double> g(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        g[k] = p.K * std::pow(std::max(data.y_up_mm[k], 0.0) / p.head_ref_mm, p.gamma) * dud[k];
+      }
+      const OnlineForcing f = [&](std::size_t k, const double*) { return g[k]; };
+      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
+      break;
+    }
+    case ModelKind::nliom_s:
+    case ModelKind::nlfom_s: {
+      const double y0 = data.y0_mm;
+      const OnlineForcing f = [&](std::size_t k, const double* xs) {
+        if (dud[k] == 0.0) return 0.0;
+        const double y_dwe = y0 + (k > 0 ? xs[k - 1] : 0.0);
+        const double head = std::max(data.y_up_mm[k] - y_dwe, 0.0);
+        return p.K * std::pow(head / p.head_ref_mm, p.gamma) * dud[k];
+      };
+      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
+      break;
+    }
+    case ModelKind::hybrid: {
+      const double y0 = data.y0_mm;
+      std::vector<double> gate;
+      if (model.actuation.gate_speed_mm_s > 0.0 || data.x_up_mm.empty()) {
+        gate = rate_limit(data.u_mm, h, model.actuation.gate_speed_mm_s);
+      } else {
+        gate = data.x_up_mm;
+      }
+      result.regime.assign(n, 0);
+      const OnlineForcing f = [&](std::size_t k, const double* xs) {
+        const double y_dwe = y0 + (k > 0 ? xs[k - 1] : 0.0);
+        const double y_up = data.y_up_mm[k];
+        const bool free = is_free_flow(y_up, y_dwe, gate[k]);
+        result.regime[k] = free ? 1 : 0;
+        if (dud[k] == 0.0) return 0.0;
+        if (free) return p.K * std::pow(std::max(y_up, 0.0) / p.head_ref_mm, p.gamma) * dud[k];
+        const double head = std::max(y_up - y_dwe, 0.0);
+        return p.K_sub * std::pow(head / p.head_ref_sub_mm, p.gamma_sub) * dud[k];
+      };
+      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
+      break;
+    }
+  }
+  result.y_dwe_mm.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    result.y_dwe_mm[k] = quantise(data.y0_mm + x[k], model.actuation.quantum_mm);
+  }
+  return result;
+}
+
+}  // namespace canalsim::reduced
