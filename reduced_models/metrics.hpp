@@ -25,8 +25,8 @@ double iae_combined(const std::vector<std::vector<double>>& models,
 
 // Δp (eq. 22) for one parameter; +inf when p_c = 0 and some p_j differs.
 double uncertainty_index(const std::vector<double>& p_j, double p_c);
-// Δp for every parameter of the model kind except L when it is identical everywhere (the paper
-// prints "-" for L); returns name → Δp as a fraction (multiply by 100 for the paper's %).
+// Δp for every parameter of the model kind (name → Δp as a fraction; ×100 for the paper's %).
+// A parameter identical everywhere (the paper's L = 4.9 s, printed "-") gets 0.
 std::map<std::string, double> uncertainty_indices(const std::vector<Model>& per_recording,
                                                   const Model& nominal);
 

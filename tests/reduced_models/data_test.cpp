@@ -1,1 +1,84 @@
+// Tests of reduced_models/data.*: preparing recordings for the models (operating point,
+// upstream level, excitation check).
+#include "reduced_models/data.hpp"
+
 #include <gtest/gtest.h>
+
+namespace canalsim::reduced {
+namespace {
+
+Recording recording(const std::vector<double>& u, const std::vector<double>& y,
+                    bool with_y_up = true) {
+  Recording r;
+  r.source = "op1.csv";
+  std::vector<double> t;
+  for (std::size_t k = 0; k < u.size(); ++k) t.push_back(0.13 * static_cast<double>(k));
+  r.set_column("t_s", t);
+  r.set_column("u_mm", u);
+  r.set_column("y_dwe_mm", y);
+  if (with_y_up) r.set_column("y_up_mm", std::vector<double>(u.size(), 61.0));
+  return r;
+}
+
+TEST(PrepareData, TakesTheOperatingPointFromTheSamplesBeforeTheInputFirstMoves) {
+  const auto d = prepare_data(recording({15, 15, 15, 20, 10}, {40.0, 40.1, 39.9, 40.0, 42.0}));
+  EXPECT_DOUBLE_EQ(d.u0_mm, 15.0);
+  EXPECT_NEAR(d.y0_mm, 40.0, 1e-12);
+  EXPECT_NEAR(d.h, 0.13, 1e-12);
+  EXPECT_TRUE(d.has_upstream_level());
+  EXPECT_EQ(d.source, "op1.csv");
+}
+
+TEST(PrepareData, UsesAGivenOperatingPoint) {
+  DataOptions o;
+  o.u0_mm = 12.0;
+  o.y0_mm = 39.0;
+  const auto d = prepare_data(recording({15, 20, 10}, {40, 41, 42}), o);
+  EXPECT_DOUBLE_EQ(d.u0_mm, 12.0);
+  EXPECT_DOUBLE_EQ(d.y0_mm, 39.0);
+}
+
+TEST(PrepareData, FillsAConstantUpstreamLevelOnlyWhenTheColumnIsAbsent) {
+  DataOptions o;
+  o.upstream_level_mm = 60.0;
+  const auto without = prepare_data(recording({15, 20, 10}, {40, 41, 42}, false), o);
+  EXPECT_TRUE(without.y_up_is_constant_option);
+  EXPECT_EQ(without.y_up_mm, std::vector<double>(3, 60.0));
+  const auto with = prepare_data(recording({15, 20, 10}, {40, 41, 42}, true), o);
+  EXPECT_EQ(with.y_up_mm, std::vector<double>(3, 61.0));
+  EXPECT_FALSE(prepare_data(recording({15, 20, 10}, {40, 41, 42}, false)).has_upstream_level());
+}
+
+TEST(PrepareData, RejectsAnInputWithoutExcitationNamingTheFile) {
+  try {
+    prepare_data(recording({15, 15, 15}, {40, 41, 42}));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("op1.csv: u_mm is constant", 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+}
+
+TEST(PrepareData, RejectsInvalidOptionsNamingTheField) {
+  DataOptions o;
+  o.upstream_level_mm = -3.0;
+  EXPECT_NE(o.validate().find("upstream_level_mm"), std::string::npos);
+  EXPECT_THROW(prepare_data(recording({15, 20}, {40, 41}), o), InputError);
+}
+
+TEST(RequireUpstreamLevel, NamesTheFileTheModelAndTheWayOut) {
+  const auto d = prepare_data(recording({15, 20, 10}, {40, 41, 42}, false));
+  try {
+    require_upstream_level(d, "nlfom-s");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("op1.csv"), std::string::npos);
+    EXPECT_NE(what.find("nlfom-s"), std::string::npos);
+    EXPECT_NE(what.find("--upstream-level"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace canalsim::reduced

@@ -1,1 +1,203 @@
+// Tests of reduced_models/models.*: model definitions, nonlinear input terms, rate limit and
+// quantisation, hybrid switching.
+#include "reduced_models/models.hpp"
+
 #include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/reduced_models/synthetic.hpp"
+
+namespace canalsim::reduced {
+namespace {
+
+ExperimentData step_data(std::size_t n, double h, double step_mm, std::size_t at = 0) {
+  ExperimentData d;
+  d.source = "step";
+  d.h = h;
+  for (std::size_t k = 0; k < n; ++k) {
+    d.t_s.push_back(h * static_cast<double>(k));
+    d.u_mm.push_back(k >= at ? 20.0 + step_mm : 20.0);
+  }
+  d.u0_mm = 20.0;
+  d.y0_mm = 40.0;
+  d.y_dwe_mm.assign(n, 40.0);
+  d.y_up_mm.assign(n, 60.0);
+  return d;
+}
+
+TEST(ModelNames, RoundTripAndAcceptUnderscoresAndCase) {
+  for (auto kind : all_model_kinds()) EXPECT_EQ(parse_model_kind(model_name(kind)), kind);
+  EXPECT_EQ(parse_model_kind("NLFOM_S"), ModelKind::nlfom_s);
+  EXPECT_FALSE(parse_model_kind("arx").has_value());
+}
+
+TEST(Liom, StepSettlesAtTheGainTimesTheStepAfterTheDelay) {
+  const auto d = step_data(2000, 0.13, 5.0);
+  Model m{ModelKind::liom, {}, {}};
+  m.p.K = 0.6;
+  m.p.T = 1.7;
+  m.p.L = 4.9;
+  const auto y = simulate(m, d).y_dwe_mm;
+  EXPECT_NEAR(y.back(), 40.0 + 3.0, 1e-9);
+  const auto delay_samples = static_cast<std::size_t>(4.9 / 0.13);  // 37.69
+  for (std::size_t k = 0; k < delay_samples; ++k) EXPECT_EQ(y[k], 40.0);
+  EXPECT_GT(y[delay_samples + 1], 40.0);
+}
+
+TEST(FractionalDelay, InterpolatesLinearlyBetweenSamples) {
+  const std::vector<double> x{0.0, 1.0, 2.0, 3.0, 4.0};
+  std::vector<double> out;
+  fractional_delay(x, 1.25, out);
+  EXPECT_DOUBLE_EQ(out[0], 0.0);
+  EXPECT_DOUBLE_EQ(out[1], 0.0);  // between x[-1] = 0 and x[0] = 0
+  EXPECT_DOUBLE_EQ(out[2], 0.75);
+  EXPECT_DOUBLE_EQ(out[4], 2.75);
+}
+
+TEST(Sopd, IsTwoCascadedFirstOrderLagsWithUnitStaticGainTimesK) {
+  const auto d = step_data(3000, 0.13, 1.0);
+  Model sopd{ModelKind::sopd, {}, {}};
+  sopd.p.K = 2.0;
+  sopd.p.T = 1.0;
+  sopd.p.T2 = 0.5;
+  const auto y = simulate(sopd, d).y_dwe_mm;
+  EXPECT_NEAR(y.back(), 42.0, 1e-9);
+  // Slower start than a single lag: second-order response has zero initial slope.
+  Model liom{ModelKind::liom, {}, {}};
+  liom.p.K = 2.0;
+  liom.p.T = 1.0;
+  EXPECT_LT(simulate(sopd, d).y_dwe_mm[3], simulate(liom, d).y_dwe_mm[3]);
+}
+
+TEST(Lfom, ShortMemorySteadyStateCarriesTheTruncationBias) {
+  const auto d = step_data(6000, 0.13, 1.0);
+  Model m{ModelKind::lfom, {}, {}};
+  m.p.K = 1.0;
+  m.p.T = 2.0;
+  m.p.lambda = 0.5;
+  const auto y = simulate(m, d).y_dwe_mm;
+  EXPECT_NEAR(y.back() - 40.0, short_memory_steady_state(2.0, 0.5, 0.13, 500), 1e-9);
+}
+
+TEST(NonlinearFree, GainScalesWithUpstreamLevelOverHeadReferenceToTheGamma) {
+  auto d = step_data(3000, 0.13, 1.0);
+  d.y_up_mm.assign(d.size(), 66.0);
+  Model m{ModelKind::nliom_f, {}, {}};
+  m.p.K = 1.0;
+  m.p.T = 0.5;
+  m.p.gamma = 2.0;
+  m.p.head_ref_mm = 60.0;
+  const auto y = simulate(m, d).y_dwe_mm;
+  EXPECT_NEAR(y.back() - 40.0, std::pow(66.0 / 60.0, 2.0), 1e-9);
+  EXPECT_NEAR(paper_gain(m), 1.0 / 3600.0, 1e-15);
+}
+
+TEST(NonlinearFree, WithGammaZeroEqualsTheLinearModel) {
+  const auto d = step_data(1000, 0.13, 3.0, 10);
+  Model nl{ModelKind::nlfom_f, {}, {}};
+  nl.p.K = 0.8;
+  nl.p.T = 1.3;
+  nl.p.lambda = 0.6;
+  nl.p.gamma = 0.0;
+  nl.p.L = 1.0;
+  Model lin = nl;
+  lin.kind = ModelKind::lfom;
+  EXPECT_EQ(simulate(nl, d).y_dwe_mm, simulate(lin, d).y_dwe_mm);
+}
+
+TEST(NonlinearSubmerged, HeadUsesTheModelsOwnOutputSoTheStepSettlesWhereTheFlowLawBalances) {
+  // Steady state of T D Δy + Δy = K ((y_up − y0 − Δy)/H)^γ Δu: Δy = K ((60 − 40 − Δy)/20)^γ Δu.
+  const auto d = step_data(4000, 0.13, 4.0);
+  Model m{ModelKind::nliom_s, {}, {}};
+  m.p.K = 1.0;
+  m.p.T = 1.0;
+  m.p.gamma = 0.5;
+  m.p.head_ref_mm = 20.0;
+  const double dy = simulate(m, d).y_dwe_mm.back() - 40.0;
+  EXPECT_NEAR(dy, 1.0 * std::sqrt((20.0 - dy) / 20.0) * 4.0, 1e-6);
+  EXPECT_LT(dy, 4.0);  // lower than the linear model's 4 mm: the head shrinks as y_dwe rises
+}
+
+TEST(NonlinearModels, RejectDataWithoutUpstreamLevelNamingTheFile) {
+  auto d = step_data(100, 0.13, 1.0);
+  d.y_up_mm.clear();
+  d.source = "op1.csv";
+  Model m{ModelKind::nlfom_s, {}, {}};
+  try {
+    simulate(m, d);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("op1.csv"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("y_up_mm"), std::string::npos);
+  }
+}
+
+TEST(RateLimit, MovesTheGateAtConstantSpeedUntilItReachesTheCommand) {
+  const std::vector<double> u{20, 25, 25, 25, 25, 15};
+  const auto x = rate_limit(u, 0.5, 4.0);  // 2 mm per sample
+  EXPECT_EQ(x, (std::vector<double>{20, 22, 24, 25, 25, 23}));
+  EXPECT_EQ(rate_limit(u, 0.5, 0.0), u);
+}
+
+TEST(Quantisation, RoundsToTheNearestMultipleOfTheResolution) {
+  EXPECT_DOUBLE_EQ(quantise(45.0312, 0.05), 45.05);
+  EXPECT_DOUBLE_EQ(quantise(45.0249, 0.05), 45.0);
+  EXPECT_DOUBLE_EQ(quantise(45.0249, 0.0), 45.0249);
+  auto d = step_data(500, 0.13, 1.0);
+  Model m{ModelKind::liom, {}, {0.0, 0.05}};
+  for (double v : simulate(m, d).y_dwe_mm) EXPECT_NEAR(std::remainder(v, 0.05), 0.0, 1e-9);
+}
+
+TEST(FlowRegime, FollowsConditionsEightAndTen) {
+  // y_lc = 0.81 y_dwe (y_dwe / x_up)^0.72 (eq. 23)
+  EXPECT_NEAR(free_flow_limit_mm(45.0, 30.0), 0.81 * 45.0 * std::pow(1.5, 0.72), 1e-12);
+  EXPECT_TRUE(is_free_flow(60.0, 45.0, 30.0));   // y_lc ≈ 48.8 < 60
+  EXPECT_FALSE(is_free_flow(60.0, 45.0, 15.0));  // y_lc ≈ 80.4 > 60
+}
+
+TEST(Hybrid, SwitchesBetweenTheFreeAndSubmergedTermsByTheFlowCondition) {
+  using testing::SyntheticSpec;
+  SyntheticSpec s;
+  s.u0 = 22.5;  // the regime boundary for y_up = 60, y_dwe = 45
+  s.noise = 0.0;
+  s.quantum = 0.0;
+  Model m{ModelKind::hybrid, {}, {}};
+  m.p.K = 0.8;
+  m.p.T = 1.5;
+  m.p.lambda = 0.6;
+  m.p.gamma = 2.0;
+  m.p.L = 2.0;
+  m.p.K_sub = 1.5;
+  m.p.gamma_sub = 0.5;
+  m.p.head_ref_mm = 60.0;
+  m.p.head_ref_sub_mm = 15.0;
+  const auto rec = testing::synthetic_recording(m, s);
+  const auto d = prepare_data(rec);
+  const auto r = simulate(m, d);
+  std::size_t free = 0;
+  for (int v : r.regime) free += static_cast<std::size_t>(v);
+  EXPECT_GT(free, d.size() / 10);
+  EXPECT_LT(free, d.size() * 9 / 10);
+  // With both gains zero the output stays at the operating point.
+  Model same = m;
+  same.p.K_sub = 0.0;
+  same.p.K = 0.0;
+  const auto flat = simulate(same, d).y_dwe_mm;
+  for (double v : flat) EXPECT_DOUBLE_EQ(v, d.y0_mm);
+}
+
+TEST(ModelValidation, NamesTheOffendingParameter) {
+  Model m{ModelKind::lfom, {}, {}};
+  m.p.lambda = -0.5;
+  EXPECT_NE(validate(m).find("lambda"), std::string::npos);
+  m.p.lambda = 0.5;
+  m.p.L = -1.0;
+  EXPECT_NE(validate(m).find("parameter L"), std::string::npos);
+  m.p.L = 0.0;
+  m.actuation.quantum_mm = -0.05;
+  EXPECT_NE(validate(m).find("quantum_mm"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canalsim::reduced
