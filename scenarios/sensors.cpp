@@ -1,0 +1,120 @@
+#include "scenarios/sensors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace canalsim {
+namespace {
+
+// Slack, in sample periods, for deciding that an observation reached a sample instant.
+constexpr double instant_slack = 1e-9;
+
+std::string outside(const char* field, const char* range, double value) {
+  std::ostringstream out;
+  out << field << ": expected a value in " << range << ", got " << value;
+  return out.str();
+}
+
+bool within(double value, double low, double high) {
+  return std::isfinite(value) && value >= low && value <= high;
+}
+
+}  // namespace
+
+const char* to_string(SensorKind kind) {
+  switch (kind) {
+    case SensorKind::level: return "level";
+    case SensorKind::gate_position: return "gate_position";
+    case SensorKind::flow: return "flow";
+  }
+  return "unknown";
+}
+
+SensorOptions SensorOptions::defaults_for(SensorKind kind) {
+  SensorOptions options;
+  options.kind = kind;
+  if (kind != SensorKind::level) options.resolution = 0.0;
+  return options;
+}
+
+std::string SensorOptions::validate() const {
+  if (kind != SensorKind::level && kind != SensorKind::gate_position && kind != SensorKind::flow) {
+    return "kind: expected level, gate_position or flow";
+  }
+  if (!within(sample_period, 0.0, 3600.0) || sample_period == 0.0) {
+    return outside("sample_period", "(0, 3600] s", sample_period);
+  }
+  if (!within(resolution, 0.0, 100.0)) return outside("resolution", "[0, 100]", resolution);
+  if (!within(noise_std, 0.0, 100.0)) return outside("noise_std", "[0, 100]", noise_std);
+  if (!within(delay, 0.0, 600.0)) return outside("delay", "[0, 600] s", delay);
+  if (!within(offset, -1000.0, 1000.0)) return outside("offset", "[-1000, 1000]", offset);
+  if (!std::isfinite(start_time)) return outside("start_time", "(-inf, inf) s", start_time);
+  return "";
+}
+
+double quantise(double value, double resolution) {
+  if (resolution <= 0.0) return value;
+  return resolution * std::round(value / resolution);  // eq. (17), nint = round half away
+}
+
+Sensor::Sensor(const SensorOptions& options)
+    : options_(options), rng_(options.seed), noise_(0.0, options.noise_std > 0.0 ? options.noise_std : 1.0) {
+  const std::string problem = options.validate();
+  if (!problem.empty()) {
+    throw std::invalid_argument(std::string(to_string(options.kind)) + " sensor: " + problem);
+  }
+}
+
+double Sensor::sample_instant(std::size_t k) const {
+  return options_.start_time + static_cast<double>(k) * options_.sample_period;
+}
+
+double Sensor::measure(double true_value) {
+  double reading = true_value + options_.offset;
+  if (options_.noise_std > 0.0) reading += noise_(rng_);
+  return quantise(reading, options_.resolution);
+}
+
+void Sensor::emit(double true_value) {
+  times_.push_back(sample_instant(times_.size()));
+  values_.push_back(measure(true_value));
+}
+
+// Linear interpolation of the observed history at t, holding the first value before it.
+double Sensor::interpolate_history(double t) const {
+  if (t <= history_.front().first) return history_.front().second;
+  if (t >= history_.back().first) return history_.back().second;
+  const auto after = std::upper_bound(history_.begin(), history_.end(), t,
+                                      [](double x, const auto& entry) { return x < entry.first; });
+  const auto& [t1, y1] = *after;
+  const auto& [t0, y0] = *(after - 1);
+  return y0 + (y1 - y0) * (t - t0) / (t1 - t0);
+}
+
+void Sensor::observe(double t, double true_value) {
+  if (!history_.empty()) {
+    if (t < history_.back().first) {
+      throw std::invalid_argument("sensor: observation times must not decrease");
+    }
+    if (t == history_.back().first) history_.pop_back();
+  }
+  history_.emplace_back(t, true_value);
+
+  const double h = options_.sample_period;
+  while (sample_instant(times_.size()) <= t + instant_slack * h) {
+    emit(interpolate_history(sample_instant(times_.size()) - options_.delay));
+  }
+  // Forget observations older than the one before the next delayed instant.
+  const double next_needed = sample_instant(times_.size()) - options_.delay;
+  while (history_.size() >= 2 && history_[1].first <= next_needed) history_.pop_front();
+}
+
+void Sensor::sample(const std::function<double(double)>& signal, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
+    emit(signal(sample_instant(times_.size()) - options_.delay));
+  }
+}
+
+}  // namespace canalsim
