@@ -1,0 +1,382 @@
+#include "solver/canal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "solver/scheme.hpp"
+
+namespace canalsim::solver {
+namespace {
+
+// Dispatch on the section type once per reach and stage (rectangular fast path).
+template <class F>
+auto with_ops(const Reach& r, double g, F&& f) {
+  const Section& s = r.section();
+  if (s.is_rectangular())
+    return f(RectangularOps{s.bottom_width, 1.0 / s.bottom_width, g});
+  return f(TrapezoidalOps{s.bottom_width, s.side_slope, g,
+                          2.0 * std::sqrt(1.0 + s.side_slope * s.side_slope)});
+}
+
+const char* end_name(End end) { return end == End::upstream ? "upstream" : "downstream"; }
+
+}  // namespace
+
+double VolumeBalance::relative_error() const {
+  const double scale = std::max({std::abs(initial_storage), std::abs(storage), std::abs(inflow),
+                                 std::abs(outflow), std::abs(lateral), 1e-300});
+  return std::abs(error()) / scale;
+}
+
+Canal::Canal(SolverOptions options) : options_(options), options_status_(validate(options)) {}
+
+Status Canal::add_reach(const ReachSpec& spec) {
+  if (!options_status_) return options_status_;
+  if (auto st = validate(spec); !st) return st;
+  reaches_.emplace_back(spec);
+  upstream_ends_.emplace_back();
+  downstream_ends_.emplace_back();
+  Accumulators acc;
+  acc.initial_storage = reaches_.back().volume();
+  acc_.push_back(acc);
+  return Status::ok();
+}
+
+Status Canal::set_boundary(int r, End end, std::shared_ptr<Boundary> boundary) {
+  if (r < 0 || r >= reach_count()) return Status::error("set_boundary: reach index " + std::to_string(r) + " does not exist");
+  if (!boundary) return Status::error("set_boundary: boundary is null");
+  EndConnection& c = (end == End::upstream ? upstream_ends_ : downstream_ends_)[static_cast<std::size_t>(r)];
+  if (c.link) return Status::error(std::string("set_boundary: the ") + end_name(end) + " end of reach " + std::to_string(r) + " already has a link");
+  c.boundary = std::move(boundary);
+  return Status::ok();
+}
+
+Status Canal::connect(int up, int down, std::shared_ptr<Link> link) {
+  if (up < 0 || up >= reach_count() || down < 0 || down >= reach_count() || up == down)
+    return Status::error("connect: reaches " + std::to_string(up) + " and " + std::to_string(down) + " must be two different existing reaches");
+  if (!link) return Status::error("connect: link is null");
+  auto& a = downstream_ends_[static_cast<std::size_t>(up)];
+  auto& b = upstream_ends_[static_cast<std::size_t>(down)];
+  if (a.boundary || a.link || b.boundary || b.link)
+    return Status::error("connect: an end of reach " + std::to_string(up) + " or " + std::to_string(down) + " is already closed");
+  a.link = link;
+  a.other_reach = down;
+  b.link = std::move(link);
+  b.other_reach = up;
+  return Status::ok();
+}
+
+Status Canal::check_ready() const {
+  if (!options_status_) return options_status_;
+  if (reaches_.empty()) return Status::error("the canal has no reach");
+  for (int r = 0; r < reach_count(); ++r) {
+    for (End end : {End::upstream, End::downstream}) {
+      const auto& c = (end == End::upstream ? upstream_ends_ : downstream_ends_)[static_cast<std::size_t>(r)];
+      if (!c.boundary && !c.link)
+        return Status::error(std::string("the ") + end_name(end) + " end of reach " + std::to_string(r) + " (" + reach(r).name() + ") has no boundary or link");
+    }
+    const Reach& R = reach(r);
+    for (int i = 0; i < R.cells(); ++i) {
+      const double a = R.area()[static_cast<std::size_t>(i)], q = R.discharge()[static_cast<std::size_t>(i)];
+      if (!std::isfinite(a) || !std::isfinite(q) || a < 0.0 || !std::isfinite(R.lateral_inflow()[static_cast<std::size_t>(i)]))
+        return Status::error_at("state is non-finite or has a negative area (allowed: finite A >= 0, finite Q and q_l)", time_, r, i);
+    }
+  }
+  return Status::ok();
+}
+
+void Canal::save_start_state() {
+  for (Reach& r : reaches_) {
+    std::copy(r.area_.begin(), r.area_.end(), r.area0_.begin());
+    std::copy(r.discharge_.begin(), r.discharge_.end(), r.discharge0_.begin());
+  }
+}
+
+void Canal::restore_start_state() {
+  for (Reach& r : reaches_) {
+    std::copy(r.area0_.begin(), r.area0_.end(), r.area_.begin());
+    std::copy(r.discharge0_.begin(), r.discharge0_.end(), r.discharge_.begin());
+  }
+}
+
+double Canal::compute_fluxes(double t) {
+  const double g = options_.gravity;
+  const StageSettings settings{options_.order == SpatialOrder::second, options_.limiter_theta,
+                               options_.dry_depth};
+  double limit = std::numeric_limits<double>::infinity();
+  // Interior faces of every reach first: the end faces need the primitives of neighbours.
+  for (Reach& r : reaches_) {
+    const double smax = with_ops(r, g, [&](const auto& ops) { return ReachKernels::interior_fluxes(r, ops, settings); });
+    if (smax > 0.0) limit = std::min(limit, r.dx_ / smax);
+  }
+  // The interior state extrapolated to an end face (the MUSCL face value; the cell average at
+  // first order), so that the boundary sees the same depth as the cell's own reconstruction.
+  auto interior = [&](const Reach& r, int i) {
+    const auto j = static_cast<std::size_t>(i);
+    const double half = i == 0 ? -0.5 : 0.5;
+    const double h = r.h_[j] + half * r.dh_[j];
+    const double eta = r.eta_[j] + half * r.deta_[j];
+    const double a = r.section_.area(h);
+    const double u = h > options_.dry_depth ? r.u_[j] + half * r.du_[j] : 0.0;
+    return InteriorState{a, a * u, h, eta - h};
+  };
+  for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
+    Reach& r = reaches_[ri];
+    const auto n = static_cast<std::size_t>(r.cells_);
+    double speed = 0.0;
+    if (const auto& c = upstream_ends_[ri]; c.boundary) {
+      const Flux f = c.boundary->flux({End::upstream, interior(r, 0), r.section_, g, t, r.dx_});
+      r.face_mass_[0] = f.mass;
+      r.face_momentum_right_[0] = f.momentum;
+      speed = std::max(speed, f.max_speed);
+    }
+    if (const auto& c = downstream_ends_[ri]; c.boundary) {
+      const Flux f = c.boundary->flux({End::downstream, interior(r, r.cells_ - 1), r.section_, g, t, r.dx_});
+      r.face_mass_[n] = f.mass;
+      r.face_momentum_left_[n] = f.momentum;
+      speed = std::max(speed, f.max_speed);
+    } else if (c.link) {
+      Reach& d = reaches_[static_cast<std::size_t>(c.other_reach)];
+      LinkInput in{interior(r, r.cells_ - 1), interior(d, 0), r.section_, d.section_, g, t};
+      const LinkFlux f = c.link->flux(in);
+      r.face_mass_[n] = f.mass;
+      r.face_momentum_left_[n] = f.momentum_upstream;
+      d.face_mass_[0] = f.mass;
+      d.face_momentum_right_[0] = f.momentum_downstream;
+      if (f.max_speed > 0.0) limit = std::min(limit, std::min(r.dx_, d.dx_) / f.max_speed);
+    }
+    if (speed > 0.0) limit = std::min(limit, r.dx_ / speed);
+  }
+  return limit;
+}
+
+Status Canal::apply_update(double dt, double alpha, double weight, bool final_stage, bool* reject) {
+  const double g = options_.gravity;
+  for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
+    Reach& r = reaches_[ri];
+    const UpdateSettings settings{dt, alpha, options_.dry_depth, g * r.manning_n_ * r.manning_n_};
+    const UpdateResult res = with_ops(r, g, [&](const auto& ops) {
+      using Ops = std::decay_t<decltype(ops)>;
+      return settings.friction > 0.0 ? ReachKernels::update<Ops, true>(r, ops, settings)
+                                     : ReachKernels::update<Ops, false>(r, ops, settings);
+    });
+    if (!std::isfinite(res.checksum)) return find_non_finite(time_ + dt);
+    Accumulators& acc = acc_[ri];
+    acc.stage_inflow += weight * dt * r.face_mass_[0];
+    acc.stage_outflow += weight * dt * r.face_mass_[static_cast<std::size_t>(r.cells_)];
+    acc.stage_lateral += weight * dt * r.dx_ * res.lateral;
+    if (res.min_area < 0.0) {
+      // Tolerate round-off (a cell drained exactly); a real loss of positivity rejects the step.
+      double scale = 0.0;
+      for (double a : r.area0_) scale = std::max(scale, a);
+      if (res.min_area < -1e-12 * scale) {
+        *reject = true;
+        return Status::ok();
+      }
+      if (final_stage) {
+        for (int i = 0; i < r.cells_; ++i) {
+          double& a = r.area_[static_cast<std::size_t>(i)];
+          if (a < 0.0) {
+            acc.correction += -a * r.dx_;
+            a = 0.0;
+            r.discharge_[static_cast<std::size_t>(i)] = 0.0;
+          }
+        }
+      }
+    }
+  }
+  return Status::ok();
+}
+
+Status Canal::find_non_finite(double t) const {
+  for (int r = 0; r < reach_count(); ++r) {
+    const Reach& R = reach(r);
+    for (int i = 0; i < R.cells(); ++i)
+      if (!std::isfinite(R.area()[static_cast<std::size_t>(i)]) || !std::isfinite(R.discharge()[static_cast<std::size_t>(i)]))
+        return Status::error_at("the state became non-finite", t, r, i);
+  }
+  return Status::error_at("the state became non-finite", t, -1, -1);
+}
+
+Status Canal::step(double max_dt) {
+  if (!options_status_) return options_status_;
+  if (reaches_.empty()) return Status::error("the canal has no reach");
+  if (!(max_dt > 0.0)) return Status::error("step: max_dt must be positive");
+  const double t = time_;
+  const bool second = options_.order == SpatialOrder::second;
+  save_start_state();
+  const double limit = compute_fluxes(t);
+  double dt = std::min({options_.cfl * limit, options_.max_time_step, max_dt});
+  if (!std::isfinite(dt))
+    return Status::error_at("no wave moves and no time limit was given: the time step is unbounded", t, -1, -1);
+  bool clipped = dt == max_dt;
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 0) {
+      restore_start_state();
+      compute_fluxes(t);
+    }
+    for (auto& acc : acc_) acc.stage_inflow = acc.stage_outflow = acc.stage_lateral = 0.0;
+    bool reject = false;
+    Status st;
+    if (!second) {
+      st = apply_update(dt, 0.0, 1.0, true, &reject);
+    } else {
+      st = apply_update(dt, 0.0, 0.5, false, &reject);
+      // Heun's second stage; a Courant number above 1 there means dt was too optimistic.
+      if (st && !reject && !(dt <= compute_fluxes(t + dt))) reject = true;
+      if (st && !reject) st = apply_update(dt, 0.5, 0.5, true, &reject);
+    }
+    if (!st) {
+      restore_start_state();
+      return st;
+    }
+    if (!reject) break;
+    if (attempt >= options_.max_step_retries) {
+      restore_start_state();
+      std::ostringstream text;
+      text << "step rejected " << attempt + 1 << " times (negative depth or Courant number > 1); last dt = " << dt << " s";
+      return Status::error_at(text.str(), t, -1, -1);
+    }
+    dt *= 0.5;
+    clipped = false;
+    ++stats_.retries;
+  }
+  for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
+    Accumulators& acc = acc_[ri];
+    acc.inflow += acc.stage_inflow;
+    acc.outflow += acc.stage_outflow;
+    acc.lateral += acc.stage_lateral;
+    if (upstream_ends_[ri].boundary) upstream_ends_[ri].boundary->on_step_accepted(t, dt, acc.stage_inflow / dt);
+    if (downstream_ends_[ri].boundary) downstream_ends_[ri].boundary->on_step_accepted(t, dt, acc.stage_outflow / dt);
+    if (downstream_ends_[ri].link) downstream_ends_[ri].link->on_step_accepted(t, dt, acc.stage_outflow / dt);
+  }
+  time_ = clipped ? t + max_dt : t + dt;
+  ++stats_.steps;
+  stats_.last_dt = dt;
+  stats_.min_dt = std::min(stats_.min_dt, dt);
+  return Status::ok();
+}
+
+Status Canal::advance_to(double t_end) {
+  if (!(t_end >= time_) || !std::isfinite(t_end)) {
+    std::ostringstream text;
+    text << "advance_to: t_end = " << t_end << " s is outside the allowed range [" << time_ << ", inf) s";
+    return Status::error(text.str());
+  }
+  if (auto st = check_ready(); !st) return st;
+  sample_due_probes();
+  while (time_ < t_end) {
+    double stop = t_end;
+    for (const Probe& p : probes_) {
+      const double next = p.next_time();
+      if (next > time_) stop = std::min(stop, next);
+    }
+    const double max_dt = stop - time_;
+    if (auto st = step(max_dt); !st) return st;
+    // A step clipped to `stop` lands on it exactly (no accumulated round-off in sample times).
+    if (stats_.last_dt == max_dt || time_ > stop) time_ = stop;
+    sample_due_probes();
+  }
+  return Status::ok();
+}
+
+Status Canal::validate_probe(const ProbeSpec& p) const {
+  if (p.reach < 0 || p.reach >= reach_count())
+    return Status::error("ProbeSpec::reach = " + std::to_string(p.reach) + " is outside the allowed range [0, " + std::to_string(reach_count() - 1) + "]");
+  const double len = reach(p.reach).length();
+  std::ostringstream text;
+  if (!(p.x >= 0.0 && p.x <= len)) {
+    text << "ProbeSpec::x = " << p.x << " m is outside the allowed range [0, " << len << "] m";
+    return Status::error(text.str());
+  }
+  if (!(p.period > 0.0 && std::isfinite(p.period))) {
+    text << "ProbeSpec::period = " << p.period << " s is outside the allowed range (0, inf) s";
+    return Status::error(text.str());
+  }
+  if (std::isinf(p.start)) return Status::error("ProbeSpec::start must be finite or NaN (NaN: now)");
+  return Status::ok();
+}
+
+int Canal::add_probe(const ProbeSpec& spec) {
+  if (!validate_probe(spec)) return -1;
+  Probe p;
+  p.spec = spec;
+  if (std::isnan(p.spec.start)) p.spec.start = time_;
+  // Samples before the current time are skipped.
+  while (p.next_time() < time_) ++p.next_index;
+  probes_.push_back(p);
+  return static_cast<int>(probes_.size()) - 1;
+}
+
+void Canal::sample_due_probes() {
+  for (Probe& p : probes_) {
+    while (p.next_time() <= time_) {
+      p.samples.time.push_back(p.next_time());
+      p.samples.value.push_back(sample(p.spec.reach, p.spec.x, p.spec.quantity));
+      ++p.next_index;
+    }
+  }
+}
+
+double Canal::sample(int ri, double x, Quantity quantity) const {
+  const Reach& r = reach(ri);
+  const double g = options_.gravity;
+  auto value = [&](int i) {
+    const auto j = static_cast<std::size_t>(i);
+    const double a = r.area()[j], h = std::max(r.section().depth(a), 0.0);
+    const double u = h > options_.dry_depth ? r.discharge()[j] / a : 0.0;
+    switch (quantity) {
+      case Quantity::depth: return h;
+      case Quantity::level: return r.bed()[j] + h;
+      case Quantity::area: return a;
+      case Quantity::discharge: return r.discharge()[j];
+      case Quantity::velocity: return u;
+      case Quantity::froude: {
+        const double c = r.section().celerity(h, g);
+        return c > 0.0 ? std::abs(u) / c : 0.0;
+      }
+    }
+    return 0.0;
+  };
+  const double s = std::clamp(x / r.cell_length() - 0.5, 0.0, static_cast<double>(r.cells() - 1));
+  const int i = std::min(static_cast<int>(s), r.cells() - 2);
+  const double w = s - i;
+  return (1.0 - w) * value(i) + w * value(i + 1);
+}
+
+VolumeBalance Canal::balance(int ri) const {
+  const Accumulators& acc = acc_.at(static_cast<std::size_t>(ri));
+  VolumeBalance b;
+  b.initial_storage = acc.initial_storage;
+  b.storage = reach(ri).volume();
+  b.inflow = acc.inflow;
+  b.outflow = acc.outflow;
+  b.lateral = acc.lateral;
+  b.positivity_correction = acc.correction;
+  return b;
+}
+
+VolumeBalance Canal::total_balance() const {
+  VolumeBalance t;
+  for (int r = 0; r < reach_count(); ++r) {
+    const VolumeBalance b = balance(r);
+    t.initial_storage += b.initial_storage;
+    t.storage += b.storage;
+    t.lateral += b.lateral;
+    t.positivity_correction += b.positivity_correction;
+    // Only free ends count: flow through links leaves one reach and enters the next.
+    if (upstream_ends_[static_cast<std::size_t>(r)].boundary) t.inflow += b.inflow;
+    if (downstream_ends_[static_cast<std::size_t>(r)].boundary) t.outflow += b.outflow;
+  }
+  return t;
+}
+
+void Canal::reset_balance() {
+  for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
+    acc_[ri] = Accumulators{};
+    acc_[ri].initial_storage = reaches_[ri].volume();
+  }
+}
+
+}  // namespace canalsim::solver

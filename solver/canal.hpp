@@ -1,0 +1,148 @@
+// Canal: reaches joined by links, with a boundary at each free end, advanced in time by the
+// finite-volume scheme (docs/numerics.md). The common case is one reach with two boundaries:
+//
+//   Canal canal;                                   // SolverOptions defaults
+//   ReachSpec spec; spec.length = 5; spec.cells = 100; ...
+//   if (auto st = canal.add_reach(spec); !st) ...  // st.message() names the bad field
+//   canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.002));
+//   canal.set_boundary(0, End::downstream, std::make_shared<CriticalDepthBoundary>());
+//   int p = canal.add_probe({0, 4.9, Quantity::depth, 0.1});
+//   if (auto st = canal.advance_to(60.0); !st) ...  // non-finite state: time, reach and cell
+//   canal.probe_samples(p); canal.total_balance().error();
+//
+// Scheme per step (Audusse et al. 2004 hydrostatic reconstruction, HLL flux, MUSCL on η, h, u,
+// Heun's SSP-RK2, semi-implicit Manning friction); dt = cfl · min dx / max |wave speed| over the
+// faces of the first stage, clipped to the next probe time or end time. Step clipping, not time
+// interpolation, is how probes sample at exact times.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "solver/boundary.hpp"
+#include "solver/options.hpp"
+#include "solver/reach.hpp"
+#include "solver/status.hpp"
+
+namespace canalsim::solver {
+
+// Volume accounting [m³] since the canal was created (or reset_balance()). Inflow and outflow
+// are the time integrals of the mass flux through the upstream and downstream end faces
+// (positive downstream), lateral the integral of Σ q_l dx, and positivity_correction the volume
+// added when round-off negative areas are set to 0. error() is what does not add up; it is
+// round-off for a conservative scheme.
+struct VolumeBalance {
+  double initial_storage = 0.0;
+  double storage = 0.0;
+  double inflow = 0.0;
+  double outflow = 0.0;
+  double lateral = 0.0;
+  double positivity_correction = 0.0;
+  double storage_change() const { return storage - initial_storage; }
+  double error() const {
+    return storage_change() - (inflow - outflow + lateral + positivity_correction);
+  }
+  // |error| relative to the largest of the volumes involved.
+  double relative_error() const;
+};
+
+enum class Quantity { depth, level, area, discharge, velocity, froude };
+
+struct ProbeSpec {
+  int reach = 0;
+  double x = 0.0;       // [m] from the reach's upstream end; linear between cell centres
+  Quantity quantity = Quantity::depth;
+  double period = 1.0;  // [s], > 0
+  // First sample time [s]; NaN means the canal's time when the probe is added.
+  double start = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct ProbeSamples {
+  std::vector<double> time;
+  std::vector<double> value;
+};
+
+struct StepStatistics {
+  long steps = 0;           // accepted steps
+  long retries = 0;         // rejected and retried steps
+  double last_dt = 0.0;
+  double min_dt = std::numeric_limits<double>::infinity();
+};
+
+class Canal {
+ public:
+  explicit Canal(SolverOptions options = {});
+  // Validates the options; a Canal with invalid options refuses to add reaches and to step.
+  const Status& options_status() const { return options_status_; }
+  const SolverOptions& options() const { return options_; }
+
+  // Adds a reach (index reach_count() - 1 on success).
+  Status add_reach(const ReachSpec& spec);
+  int reach_count() const { return static_cast<int>(reaches_.size()); }
+  Reach& reach(int r) { return reaches_.at(static_cast<std::size_t>(r)); }
+  const Reach& reach(int r) const { return reaches_.at(static_cast<std::size_t>(r)); }
+
+  // End conditions. Each end of each reach needs exactly one boundary or one link.
+  Status set_boundary(int reach, End end, std::shared_ptr<Boundary> boundary);
+  // Joins the downstream end of `upstream` to the upstream end of `downstream`.
+  Status connect(int upstream, int downstream, std::shared_ptr<Link> link);
+  // Checks that every end is closed and the state is finite and non-negative.
+  Status check_ready() const;
+
+  double time() const { return time_; }
+  void set_time(double t) { time_ = t; }
+
+  // One time step of at most max_dt. On failure the state is left at the start of the step.
+  Status step(double max_dt = std::numeric_limits<double>::infinity());
+  // Steps until time() == t_end exactly, sampling the probes on the way.
+  Status advance_to(double t_end);
+
+  int add_probe(const ProbeSpec& probe);  // returns the probe index; -1 if invalid (see probe_status)
+  Status validate_probe(const ProbeSpec& probe) const;
+  const ProbeSamples& probe_samples(int p) const { return probes_.at(static_cast<std::size_t>(p)).samples; }
+  // The value of a quantity at x in a reach now (linear interpolation between cell centres,
+  // constant beyond the first and last centres).
+  double sample(int reach, double x, Quantity quantity) const;
+
+  VolumeBalance balance(int reach) const;
+  VolumeBalance total_balance() const;
+  void reset_balance();  // starts the accounting afresh from the current state
+
+  const StepStatistics& statistics() const { return stats_; }
+
+ private:
+  struct EndConnection {
+    std::shared_ptr<Boundary> boundary;
+    std::shared_ptr<Link> link;
+    int other_reach = -1;
+  };
+  struct Probe {
+    ProbeSpec spec;
+    long next_index = 0;
+    ProbeSamples samples;
+    double next_time() const { return spec.start + static_cast<double>(next_index) * spec.period; }
+  };
+  struct Accumulators {  // per reach
+    double initial_storage = 0, inflow = 0, outflow = 0, lateral = 0, correction = 0;
+    double stage_inflow = 0, stage_outflow = 0, stage_lateral = 0;  // weighted over a step
+  };
+
+  double compute_fluxes(double t);  // all reaches, returns min over reaches of dx / max speed
+  Status apply_update(double dt, double alpha, double weight, bool final_stage, bool* reject);
+  void save_start_state();
+  void restore_start_state();
+  void sample_due_probes();
+  Status find_non_finite(double t) const;
+
+  SolverOptions options_;
+  Status options_status_;
+  std::vector<Reach> reaches_;
+  std::vector<EndConnection> upstream_ends_, downstream_ends_;
+  std::vector<Accumulators> acc_;
+  std::vector<Probe> probes_;
+  double time_ = 0.0;
+  StepStatistics stats_;
+};
+
+}  // namespace canalsim::solver

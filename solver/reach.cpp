@@ -1,0 +1,31 @@
+#include "solver/reach.hpp"
+
+namespace canalsim::solver {
+
+Reach::Reach(const ReachSpec& spec)
+    : name_(spec.name),
+      cells_(spec.cells),
+      length_(spec.length),
+      dx_(spec.length / spec.cells),
+      section_(spec.section),
+      manning_n_(spec.manning_n) {
+  const auto n = static_cast<std::size_t>(cells_);
+  bed_ = spec.bed_elevation.empty() ? std::vector<double>(n, 0.0) : spec.bed_elevation;
+  area_.assign(n, 0.0);
+  discharge_.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!spec.initial_depth.empty()) area_[i] = section_.area(spec.initial_depth[i]);
+    if (!spec.initial_discharge.empty()) discharge_[i] = spec.initial_discharge[i];
+  }
+  lateral_inflow_.assign(n, 0.0);
+  for (auto* v : {&area0_, &discharge0_, &h_, &u_, &eta_, &dh_, &du_, &deta_}) v->assign(n, 0.0);
+  for (auto* v : {&face_mass_, &face_momentum_left_, &face_momentum_right_}) v->assign(n + 1, 0.0);
+}
+
+double Reach::volume() const {
+  double sum = 0.0;
+  for (double a : area_) sum += a;
+  return sum * dx_;
+}
+
+}  // namespace canalsim::solver

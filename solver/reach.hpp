@@ -1,0 +1,60 @@
+// A reach: the state of one prismatic channel stretch in structure-of-arrays form (one contiguous
+// array per quantity, one value per cell), plus the work arrays of the scheme so that a step never
+// allocates. Cell i covers [i dx, (i+1) dx] with x = 0 at the upstream end.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "solver/options.hpp"
+#include "solver/section.hpp"
+
+namespace canalsim::solver {
+
+class Reach {
+ public:
+  explicit Reach(const ReachSpec& spec);  // spec must pass validate(spec)
+
+  const std::string& name() const { return name_; }
+  int cells() const { return cells_; }
+  double length() const { return length_; }
+  double cell_length() const { return dx_; }
+  double x_centre(int i) const { return (i + 0.5) * dx_; }
+  const Section& section() const { return section_; }
+  double manning_n() const { return manning_n_; }
+
+  // Conserved state: wetted area A [m²] and discharge Q [m³/s] per cell. Callers may write them
+  // between steps (e.g. to set an initial state); keep A >= 0.
+  std::vector<double>& area() { return area_; }
+  const std::vector<double>& area() const { return area_; }
+  std::vector<double>& discharge() { return discharge_; }
+  const std::vector<double>& discharge() const { return discharge_; }
+  // Bed elevation z per cell [m].
+  const std::vector<double>& bed() const { return bed_; }
+  // Lateral inflow per unit length q_l [m²/s] per cell (negative: withdrawal). Set it between
+  // steps; it is held constant over a step. Inflow brings no x-momentum; withdrawal removes the
+  // local momentum q_l u.
+  std::vector<double>& lateral_inflow() { return lateral_inflow_; }
+  const std::vector<double>& lateral_inflow() const { return lateral_inflow_; }
+
+  double depth(int i) const { return section_.depth(area_[i]); }
+  double level(int i) const { return bed_[i] + depth(i); }
+  double volume() const;  // Σ A dx [m³]
+
+ private:
+  friend class Canal;
+  friend struct ReachKernels;
+  std::string name_;
+  int cells_;
+  double length_, dx_;
+  Section section_;
+  double manning_n_;
+  std::vector<double> area_, discharge_, bed_, lateral_inflow_;
+  // Scheme work arrays (see scheme in canal.cpp): start-of-step state, primitive variables and
+  // their limited slopes per cell, fluxes per face (cells + 1 faces; face f is left of cell f).
+  std::vector<double> area0_, discharge0_;
+  std::vector<double> h_, u_, eta_, dh_, du_, deta_;
+  std::vector<double> face_mass_, face_momentum_left_, face_momentum_right_;
+};
+
+}  // namespace canalsim::solver
