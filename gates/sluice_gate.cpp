@@ -18,6 +18,8 @@ constexpr double swamee_contraction_exponent = 0.072;
 constexpr double swamee_jump_ratio = 15.0;
 constexpr double border_coefficient = 0.81;  // eq. (8), (10), (23)
 constexpr double border_exponent = 0.72;
+// Floor of the flow law's regime border in units of the tailwater depth (see forward()).
+constexpr double zero_head_border_ratio = 1.05;
 constexpr double submergence_weight = 0.32;
 constexpr double submergence_exponent = 0.7;
 
@@ -199,7 +201,14 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
     dqf_da = f.d_a * dseen_da;
   }
 
-  const double y_lc = limit_condition_level(y3, a_seen);
+  // The border of the flow law: Swamee's y_lc (paper eq. 23), floored at kappa y3. Without the
+  // floor a gate opened wider than ~0.75 y3 (where y_lc < y3) would pass free flow right up to
+  // zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
+  // the discharge falls continuously to zero. The paper's regime classification
+  // (classify_regime) keeps the published condition.
+  const double y_lc_swamee = limit_condition_level(y3, a_seen);
+  const bool floored = zero_head_border_ratio * y3 > y_lc_swamee;
+  const double y_lc = floored ? zero_head_border_ratio * y3 : y_lc_swamee;
   if (y1 > y_lc) {  // condition (8): free flow
     regime = out_of_water ? GateRegime::out_of_water : GateRegime::free;
     out.q = qf;
@@ -235,8 +244,8 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const double dD_dhead = submergence_exponent * floored_power(head, submergence_exponent - 1.0, floor);
   const double dS_dmargin =
       submergence_exponent * floored_power(margin, submergence_exponent - 1.0, floor);
-  const double dylc_dy3 = (1.0 + border_exponent) * y_lc / y3;
-  const double dylc_dseen = -border_exponent * y_lc / a_seen;
+  const double dylc_dy3 = floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;
+  const double dylc_dseen = floored ? 0.0 : -border_exponent * y_lc / a_seen;
 
   const double dF_dy1 = dF_dD * dD_dhead + dF_dS * dS_dmargin * (dylc_dseen * dseen_dy1 - 1.0);
   const double dF_dy3 = -dF_dD * dD_dhead + dF_dS * dS_dmargin * dylc_dy3;

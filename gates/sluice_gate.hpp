@@ -27,6 +27,10 @@
 // Extensions beyond the published laws, each chosen so that q stays continuous:
 // - Reverse head (y3 > y1): the law is applied with the roles of the two sides swapped and the
 //   sign of q reversed, so q(y1, y3, a) = -q(y3, y1, a) exactly.
+// - Wide-open gate near zero head: where y_lc < 1.05 y3 (a gate opened wider than ~0.75 y3),
+//   Swamee's condition would call the flow free up to zero head and q would jump to reverse flow.
+//   The flow law floors its border at 1.05 y3, so the flow submerges as the head vanishes and q
+//   falls continuously to 0. classify_regime keeps the paper's published condition.
 // - Closed gate (a <= 0 and no leakage): a wall, q = 0.
 // - Leakage: the law sees the opening max(a, 0) + leakage_opening, so a "closed" gate with
 //   leakage passes the flow of a small opening.

@@ -68,7 +68,7 @@ TEST(SwameeFreeFlow, AgreesWithThePublishedDischargeCoefficientForm) {
 
 TEST(SwameeFreeFlow, TailwaterBelowTheLimitDoesNotChangeTheDischarge) {
   const SluiceGate gate;
-  const double y1 = 0.06, a = 0.04;
+  const double y1 = 0.06, a = 0.03;  // y_lc > 1.05 y3 here: the law's border is Swamee's own
   const double y3_border = border_tailwater(y1, a);
   const double q0 = gate.discharge(y1, 0.0, a);
   for (double y3 : {0.001, 0.01, 0.5 * y3_border, 0.999 * y3_border}) {
@@ -140,6 +140,9 @@ TEST(ClassifyRegime, AgreesWithTheRegimeTheLawUses) {
   const SluiceGate gate;
   for (double y3 = 0.005; y3 < 0.06; y3 += 0.0025) {
     for (double a = 0.005; a < 0.05; a += 0.0025) {
+      // Where the law floors its border at 1.05 y3 (wide-open gate near zero head) it submerges
+      // earlier than the paper's condition; see WideOpenGateDischargeFallsContinuouslyToZeroHead.
+      if (limit_condition_level(y3, a) < 1.05 * y3 && 0.06 <= 1.05 * y3) continue;
       EXPECT_EQ(gate.evaluate(0.06, y3, a).regime, classify_regime(0.06, y3, a)) << y3 << ' ' << a;
     }
   }
@@ -390,6 +393,45 @@ TEST(SluiceGateOptions, ValidationNamesTheFieldAndItsRange) {
   options.leakage_opening = -0.1;
   EXPECT_NE(options.validate().find("leakage_opening"), std::string::npos);
   EXPECT_THROW(SluiceGate{options}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace canalsim::gates
+
+namespace canalsim::gates {
+namespace {
+
+// A gate opened wider than ~0.75 of the tailwater depth has y_lc < y3: Swamee's condition alone
+// would call the flow free right up to zero head and then jump to reverse flow. The law's border
+// is floored at 1.05 y3 so the discharge falls continuously to zero (the paper's regime
+// classification keeps the published condition).
+TEST(SwameeContinuity, WideOpenGateDischargeFallsContinuouslyToZeroHead) {
+  const SluiceGate gate;
+  const double y1 = 0.060, a = 0.045;
+  ASSERT_LT(limit_condition_level(0.0599, a), y1) << "the case must be one the floor is for";
+  EXPECT_EQ(classify_regime(y1, 0.0599, a), GateRegime::free);      // the paper's condition
+  EXPECT_EQ(gate.evaluate(y1, 0.0599, a).regime, GateRegime::submerged);  // the flow law
+  EXPECT_NEAR(gate.discharge(y1, y1, a), 0.0, 1e-15);
+  EXPECT_GT(gate.discharge(y1, 0.057, a), 0.0);
+  EXPECT_LT(gate.discharge(y1, 0.0605, a), 0.0);
+  // Through the floored border (y3 = y1/1.05) and zero head: the largest change between
+  // neighbouring points shrinks like step^0.7 (Hölder continuity), where a jump would not shrink.
+  const double q_free = gate.discharge(y1, 0.0, a);
+  auto worst_step = [&](double step) {
+    double worst = 0.0;
+    for (double kink : {y1 / 1.05, y1}) {
+      double previous = gate.discharge(y1, kink - 1000 * step, a);
+      for (int i = -999; i <= 1000; ++i) {
+        const double q = gate.discharge(y1, kink + i * step, a);
+        worst = std::max(worst, std::abs(q - previous) / q_free);
+        previous = q;
+      }
+    }
+    return worst;
+  };
+  const double coarse = worst_step(1e-7), fine = worst_step(1e-9);
+  EXPECT_LT(fine, 0.1 * coarse);  // 100^-0.7 = 0.04 expected
+  EXPECT_LT(fine, 1e-4);
 }
 
 }  // namespace
