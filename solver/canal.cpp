@@ -9,16 +9,6 @@
 namespace canalsim::solver {
 namespace {
 
-// Dispatch on the section type once per reach and stage (rectangular fast path).
-template <class F>
-auto with_ops(const Reach& r, double g, F&& f) {
-  const Section& s = r.section();
-  if (s.is_rectangular())
-    return f(RectangularOps{s.bottom_width, 1.0 / s.bottom_width, g});
-  return f(TrapezoidalOps{s.bottom_width, s.side_slope, g,
-                          2.0 * std::sqrt(1.0 + s.side_slope * s.side_slope)});
-}
-
 const char* end_name(End end) { return end == End::upstream ? "upstream" : "downstream"; }
 
 }  // namespace
@@ -107,7 +97,7 @@ double Canal::compute_fluxes(double t) {
   double limit = std::numeric_limits<double>::infinity();
   // Interior faces of every reach first: the end faces need the primitives of neighbours.
   for (Reach& r : reaches_) {
-    const double smax = with_ops(r, g, [&](const auto& ops) { return ReachKernels::interior_fluxes(r, ops, settings); });
+    const double smax = compute_interior_fluxes(r, settings, g);
     if (smax > 0.0) limit = std::min(limit, r.dx_ / smax);
   }
   // The interior state extrapolated to an end face (the MUSCL face value; the cell average at
@@ -156,21 +146,18 @@ Status Canal::apply_update(double dt, double alpha, double weight, bool final_st
   for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
     Reach& r = reaches_[ri];
     const UpdateSettings settings{dt, alpha, options_.dry_depth, g * r.manning_n_ * r.manning_n_};
-    const UpdateResult res = with_ops(r, g, [&](const auto& ops) {
-      using Ops = std::decay_t<decltype(ops)>;
-      return settings.friction > 0.0 ? ReachKernels::update<Ops, true>(r, ops, settings)
-                                     : ReachKernels::update<Ops, false>(r, ops, settings);
-    });
-    if (!std::isfinite(res.checksum)) return find_non_finite(time_ + dt);
+    const UpdateResult res = apply_stage_update(r, settings, g);
+    if (res.any_non_finite) return find_non_finite(time_ + dt);
     Accumulators& acc = acc_[ri];
     acc.stage_inflow += weight * dt * r.face_mass_[0];
     acc.stage_outflow += weight * dt * r.face_mass_[static_cast<std::size_t>(r.cells_)];
-    acc.stage_lateral += weight * dt * r.dx_ * res.lateral;
-    if (res.min_area < 0.0) {
+    if (res.any_lateral) acc.stage_lateral += weight * dt * lateral_volume_rate(r, options_.dry_depth);
+    if (res.any_negative) {
       // Tolerate round-off (a cell drained exactly); a real loss of positivity rejects the step.
-      double scale = 0.0;
+      double scale = 0.0, min_area = 0.0;
       for (double a : r.area0_) scale = std::max(scale, a);
-      if (res.min_area < -1e-12 * scale) {
+      for (double a : r.area_) min_area = std::min(min_area, a);
+      if (min_area < -1e-12 * scale) {
         *reject = true;
         return Status::ok();
       }

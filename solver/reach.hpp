@@ -44,6 +44,7 @@ class Reach {
  private:
   friend class Canal;
   friend struct ReachKernels;
+  friend double lateral_volume_rate(const Reach&, double);
   std::string name_;
   int cells_;
   double length_, dx_;

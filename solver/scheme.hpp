@@ -10,7 +10,9 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "solver/flux.hpp"
 #include "solver/reach.hpp"
@@ -58,10 +60,22 @@ struct UpdateSettings {
 };
 
 struct UpdateResult {
-  double min_area;     // smallest new area (negative: positivity lost)
-  double checksum;     // Σ (A + Q): non-finite iff some value is
-  double lateral;      // Σ q_l,eff over cells [m²/s] (times dx dt: volume)
+  bool any_negative;    // some new area < 0 (positivity lost, or round-off)
+  bool any_non_finite;  // some new A or Q is NaN or infinite
+  bool any_lateral;     // some q_l != 0 (then lateral_volume_rate() is worth computing)
 };
+
+// x^(-1/3) for x > 0 in loops that must vectorise (std::cbrt has no vector version and costs a
+// library call): a bit-level first guess on the float representation (|relative error| < 3.5%),
+// then four Newton steps y ← y (4 − x y³) / 3 for f(y) = y⁻³ − x, which square the error each time
+// (~1e-16 after four) and need no division. x is clamped to [1e-30, 1e30].
+inline double inverse_cube_root_positive(double x) {
+  x = std::min(std::max(x, 1e-30), 1e30);
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(static_cast<float>(x));
+  double y = static_cast<double>(std::bit_cast<float>(0x54a21d2au - bits / 3u));
+  for (int k = 0; k < 4; ++k) y *= (4.0 - x * y * y * y) * (1.0 / 3.0);
+  return y;
+}
 
 // Generalised minmod slope of a_{i-1}, a_i, a_{i+1} (θ in [1, 2]).
 inline double limited_slope(double am, double a0, double ap, double theta) {
@@ -81,116 +95,12 @@ inline void end_slopes(const double* h, const double* eta, const double* u, doub
   du[end] = wet ? sign * (u[inner] - u[end]) : 0.0;
 }
 
-struct ReachKernels {
-  // Steps (1)–(3). Returns the largest wave speed over interior faces.
-  template <class Ops>
-  static double interior_fluxes(Reach& r, const Ops& ops, const StageSettings& s) {
-    const int n = r.cells_;
-    const double* __restrict a = r.area_.data();
-    const double* __restrict q = r.discharge_.data();
-    const double* __restrict z = r.bed_.data();
-    double* __restrict h = r.h_.data();
-    double* __restrict u = r.u_.data();
-    double* __restrict eta = r.eta_.data();
-    double* __restrict dh = r.dh_.data();
-    double* __restrict du = r.du_.data();
-    double* __restrict deta = r.deta_.data();
-    const double dry = s.dry_depth;
-    for (int i = 0; i < n; ++i) {
-      const double hi = std::max(ops.depth(a[i]), 0.0);
-      h[i] = hi;
-      u[i] = hi > dry ? q[i] / a[i] : 0.0;
-      eta[i] = z[i] + hi;
-    }
-    if (s.second_order) {
-      const double th = s.theta;
-      // End cells keep zero slopes (first order next to boundaries and links).
-      for (int i = 1; i < n - 1; ++i) {
-        dh[i] = limited_slope(h[i - 1], h[i], h[i + 1], th);
-        deta[i] = limited_slope(eta[i - 1], eta[i], eta[i + 1], th);
-        du[i] = limited_slope(u[i - 1], u[i], u[i + 1], th);
-      }
-      // End cells: the one-sided difference towards the interior when both cells are wet (so the
-      // boundary face sees a second-order state and a bed extrapolated to the end, which keeps
-      // steady friction profiles second order up to the boundary); zero slope next to dry cells,
-      // which keeps lake-at-rest exact at shores. The depth slope is clipped to keep h ± dh/2 >= 0.
-      end_slopes(h, eta, u, dh, deta, du, 0, 1, dry);
-      end_slopes(h, eta, u, dh, deta, du, n - 1, n - 2, dry);
-    }
-    double* __restrict fm = r.face_mass_.data();
-    double* __restrict fl = r.face_momentum_left_.data();
-    double* __restrict fr = r.face_momentum_right_.data();
-    double smax = 0.0;
-    for (int f = 1; f < n; ++f) {
-      const int L = f - 1, R = f;
-      // Reconstructed values at the face from each side.
-      const double hm = h[L] + 0.5 * dh[L], etam = eta[L] + 0.5 * deta[L];
-      const double hp = h[R] - 0.5 * dh[R], etap = eta[R] - 0.5 * deta[R];
-      const double um = u[L] + 0.5 * du[L], up = u[R] - 0.5 * du[R];
-      // Hydrostatic reconstruction: one bed level per face, depths that keep η.
-      const double zface = std::max(etam - hm, etap - hp);
-      const double hl = std::max(0.0, etam - zface);
-      const double hr = std::max(0.0, etap - zface);
-      const PointState left{ops.area(hl), hl > dry ? um : 0.0, ops.pressure(hl), ops.celerity(hl)};
-      const PointState right{ops.area(hr), hr > dry ? up : 0.0, ops.pressure(hr), ops.celerity(hr)};
-      const Flux flux = hll_flux(left, right);
-      fm[f] = flux.mass;
-      // Each side sees the pressure of its own reconstructed depth (Audusse et al. 2004, eq. 2.6).
-      fl[f] = flux.momentum + (ops.pressure(hm) - left.pressure);
-      fr[f] = flux.momentum + (ops.pressure(hp) - right.pressure);
-      smax = std::max(smax, flux.max_speed);
-    }
-    return smax;
-  }
-
-  // Step (4). The centred source g Ā (z_left − z_right) with Ā = (I1(h_right) − I1(h_left)) /
-  // (h_right − h_left) cancels the pressure difference of a lake at rest exactly (Audusse et al.
-  // 2004, §3); friction Q ← Q* / (1 + dt g n² |Q| / (A R^{4/3})) is linearly implicit, so it
-  // damps without bound but never reverses the flow (e.g. Liang & Marche 2009).
-  template <class Ops, bool kFriction>
-  static UpdateResult update(Reach& r, const Ops& ops, const UpdateSettings& s) {
-    const int n = r.cells_;
-    double* __restrict a = r.area_.data();
-    double* __restrict q = r.discharge_.data();
-    const double* __restrict a0 = r.area0_.data();
-    const double* __restrict q0 = r.discharge0_.data();
-    const double* __restrict h = r.h_.data();
-    const double* __restrict u = r.u_.data();
-    const double* __restrict dh = r.dh_.data();
-    const double* __restrict deta = r.deta_.data();
-    const double* __restrict ql = r.lateral_inflow_.data();
-    const double* __restrict fm = r.face_mass_.data();
-    const double* __restrict fl = r.face_momentum_left_.data();
-    const double* __restrict fr = r.face_momentum_right_.data();
-    const double dt = s.dt, alpha = s.alpha, beta = 1.0 - alpha, dry = s.dry_depth;
-    const double dt_dx = dt / r.dx_;
-    const double g = ops.g;
-    double min_area = INFINITY, checksum = 0.0, lateral = 0.0;
-    for (int i = 0; i < n; ++i) {
-      const double hleft = h[i] - 0.5 * dh[i], hright = h[i] + 0.5 * dh[i];
-      const double source = g * ops.mean_area(hleft, hright) * (dh[i] - deta[i]);
-      const double qlat = h[i] > dry ? ql[i] : std::max(ql[i], 0.0);
-      const double a_star = a[i] - dt_dx * (fm[i + 1] - fm[i]) + dt * qlat;
-      double q_star = q[i] - dt_dx * (fl[i + 1] - fr[i] - source) + dt * std::min(qlat, 0.0) * u[i];
-      const double h_star = ops.depth(std::max(a_star, 0.0));
-      if constexpr (kFriction) {
-        // k from the stage's own state (not Q*): a steady state then satisfies the discrete
-        // momentum balance L(U) = k(U) Q exactly, for any dt.
-        const double radius = a[i] / ops.perimeter(h[i]);
-        const double k = h[i] > dry ? s.friction * std::abs(q[i]) / (a[i] * radius * std::cbrt(radius)) : 0.0;
-        q_star /= 1.0 + dt * k;
-      }
-      q_star = h_star > dry ? q_star : 0.0;
-      const double a_new = alpha * a0[i] + beta * a_star;
-      const double q_new = alpha * q0[i] + beta * q_star;
-      a[i] = a_new;
-      q[i] = q_new;
-      min_area = std::min(min_area, a_new);
-      checksum += a_new + q_new;
-      lateral += qlat;
-    }
-    return {min_area, checksum, lateral};
-  }
-};
+// Steps (1)–(3) on one reach: returns the largest wave speed over its interior faces. The end
+// faces (0 and cells) are left for the caller.
+double compute_interior_fluxes(Reach& reach, const StageSettings& settings, double gravity);
+// Step (4) on one reach, from the fluxes of the last compute_interior_fluxes and the end faces.
+UpdateResult apply_stage_update(Reach& reach, const UpdateSettings& settings, double gravity);
+// Σ q_l,eff dx [m³/s] applied by the last stage (q_l of dry cells limited to inflow).
+double lateral_volume_rate(const Reach& reach, double dry_depth);
 
 }  // namespace canalsim::solver
