@@ -325,7 +325,8 @@ std::vector<Point> smooth_points(const SluiceGate& gate, int count) {
     const Point p{depth(rng), depth(rng), opening(rng)};
     const double high = std::max(p.y1, p.y3), low = std::min(p.y1, p.y3);
     const double a_seen = std::min(p.a, gate.critical_opening_ratio() * high);
-    const double y_lc = limit_condition_level(low, a_seen);
+    // The flow law's border: Swamee's y_lc, floored at 1.05 y3 (header comment).
+    const double y_lc = std::max(limit_condition_level(low, a_seen), 1.05 * low);
     if (high - low < 1e-3) continue;                                  // zero head
     if (std::abs(high - y_lc) < 1e-3) continue;                       // regime border
     if (std::abs(p.a - gate.critical_opening_ratio() * high) < 1e-3) continue;  // cap kink
