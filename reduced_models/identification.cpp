@@ -20,6 +20,12 @@ std::string number(double v) {
   return out.str();
 }
 
+// Models whose output deviation is K times a response that does not depend on K (the forcing
+// does not read the model's own output): K can be profiled out exactly.
+bool output_linear_in_gain(ModelKind kind) {
+  return is_linear_time_invariant(kind) || kind == ModelKind::nliom_f || kind == ModelKind::nlfom_f;
+}
+
 ModelKind linear_counterpart(ModelKind kind) {
   if (kind == ModelKind::sopd) return ModelKind::sopd;
   return is_fractional(kind) ? ModelKind::lfom : ModelKind::liom;
@@ -56,7 +62,7 @@ class Problem {
         set_parameter(base_.p, name, *spec.initial);
         continue;
       }
-      if (name == "K" && is_linear_time_invariant(kind)) {
+      if (name == "K" && output_linear_in_gain(kind)) {
         profile_K_ = true;
         continue;
       }
@@ -187,6 +193,67 @@ class Problem {
     return best;
   }
 
+  // Coarse scans before the local refinement (the IAE is multimodal in γ, and for the hybrid in
+  // the split of the gain between the regimes): alternately scans the exponents (γ, γ_sub) on a
+  // small grid and, for the hybrid, the gains (K, K_sub) as multiples of the start, keeping the
+  // best. About 30–60 cost evaluations.
+  Model coarse_starts(const Model& start) {
+    const auto is_free = [&](const char* name) {
+      return std::find(free_.begin(), free_.end(), name) != free_.end();
+    };
+    Model best = start;
+    double best_cost = cost(best);
+    auto try_model = [&](Model m) {
+      const double c = cost(m);
+      if (c < best_cost) {
+        best_cost = c;
+        best = m;
+      }
+    };
+    auto values = [&](const char* name, const std::vector<double>& grid, double current) {
+      if (!is_free(name)) return std::vector<double>{current};
+      const auto& spec = options_.bounds[name];
+      std::vector<double> out;
+      for (double g : grid) {
+        if (g >= spec.lower && g <= spec.upper) out.push_back(g);
+      }
+      return out.empty() ? std::vector<double>{current} : out;
+    };
+    const bool hybrid = kind_ == ModelKind::hybrid;
+    const std::vector<double> gamma_grid =
+        hybrid ? std::vector<double>{0.5, 1.5, 3.0, 6.0}
+               : std::vector<double>{0.25, 0.75, 1.5, 2.5, 4.0, 6.0, 8.5};
+    auto scan_gamma = [&] {
+      const Model centre = best;
+      for (double g : values("gamma", gamma_grid, centre.p.gamma)) {
+        for (double gs : values("gamma_sub", gamma_grid, centre.p.gamma_sub)) {
+          Model m = centre;
+          m.p.gamma = g;
+          m.p.gamma_sub = gs;
+          try_model(m);
+        }
+      }
+    };
+    auto scan_gains = [&] {
+      const Model centre = best;
+      for (double a : {0.7, 1.0, 1.4}) {
+        for (double b : {0.7, 1.0, 1.4}) {
+          Model m = centre;
+          if (is_free("K")) m.p.K = std::clamp(centre.p.K * a, options_.bounds.K.lower, options_.bounds.K.upper);
+          if (is_free("K_sub")) {
+            m.p.K_sub = std::clamp(centre.p.K_sub * b, options_.bounds.K_sub.lower, options_.bounds.K_sub.upper);
+          }
+          try_model(m);
+        }
+      }
+    };
+    if (!is_free("gamma") && !is_free("gamma_sub") && !hybrid) return best;
+    if (hybrid) scan_gains();
+    scan_gamma();
+    if (hybrid) scan_gains();
+    return best;
+  }
+
   // Stage 2: NLopt from `start` with L bracketed around start.p.L. Returns the best model.
   Model refine(const Model& start, double& best_cost, bool& converged, std::string& message) {
     Model current = start;
@@ -199,12 +266,16 @@ class Problem {
       L_hi = std::min(Lspec.upper, L + 2.0 * h0);
     };
     set_bracket(start.p.L);
-    const int runs = 1 + std::max(0, options_.restarts);
+    const int runs =
+        1 + std::max(0, kind_ == ModelKind::hybrid ? options_.hybrid_restarts : options_.restarts);
     int recentre = 0;
     for (int run = 0; run < runs; ++run) {
       const Model before = current;
       double cost = kInf;
-      current = run_nlopt(current, L_lo, L_hi, cost, converged, message);
+      // Restarts alternate the optimiser: BOBYQA's quadratic models can stall on this nonsmooth
+      // (L1, switching) cost where a simplex method walks on, and vice versa.
+      const bool alternate = run % 2 == 1;
+      current = run_nlopt(current, L_lo, L_hi, alternate, cost, converged, message);
       if (cost < best_cost) best_cost = cost;
       const double L = current.p.L;
       const bool at_edge = (L - L_lo < 1e-6 * h0 && L_lo > Lspec.lower) ||
@@ -225,8 +296,8 @@ class Problem {
   }
 
  private:
-  Model run_nlopt(const Model& start, double L_lo, double L_hi, double& best_cost, bool& converged,
-                  std::string& message) {
+  Model run_nlopt(const Model& start, double L_lo, double L_hi, bool alternate, double& best_cost,
+                  bool& converged, std::string& message) {
     const std::size_t dim = free_.size();
     Model best = start;
     best_cost = kInf;
@@ -261,7 +332,9 @@ class Problem {
     }
     nlopt::algorithm algorithm = nlopt::LN_BOBYQA;
     if (options_.optimizer == Optimizer::sbplx) algorithm = nlopt::LN_SBPLX;
-    if (options_.optimizer == Optimizer::nelder_mead || dim < 2) algorithm = nlopt::LN_NELDERMEAD;
+    if (options_.optimizer == Optimizer::nelder_mead) algorithm = nlopt::LN_NELDERMEAD;
+    if (alternate) algorithm = algorithm == nlopt::LN_BOBYQA ? nlopt::LN_SBPLX : nlopt::LN_BOBYQA;
+    if (dim < 2) algorithm = nlopt::LN_NELDERMEAD;
     nlopt::opt opt(algorithm, static_cast<unsigned>(dim));
     opt.set_lower_bounds(lo);
     opt.set_upper_bounds(hi);
@@ -321,6 +394,10 @@ FitResult finish(const Model& model, const std::vector<const ExperimentData*>& d
                  const SimulationOptions& simulation) {
   FitResult result;
   result.model = model;
+  // SOPD's two lags commute: report the slower one as T (the canonical order T >= T2).
+  if (model.kind == ModelKind::sopd && result.model.p.T2 > result.model.p.T) {
+    std::swap(result.model.p.T, result.model.p.T2);
+  }
   for (const auto* d : data) {
     const auto v = validate_model(model, *d, simulation);
     result.sources.push_back(d->source);
@@ -368,6 +445,7 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
     }
     set_parameter(start.p, name, std::clamp(value, spec.lower, spec.upper));
   }
+  start = nl.coarse_starts(start);
   Model best = nl.refine(start, cost, converged, message);
   evaluations += nl.evaluations();
   FitResult r = finish(best, data, options.simulation);
@@ -427,6 +505,7 @@ std::string FitOptions::validate() const {
   if (!(relative_tolerance > 0.0)) return "relative_tolerance: expected > 0";
   if (max_evaluations < 1) return "max_evaluations: expected >= 1";
   if (restarts < 0) return "restarts: expected >= 0";
+  if (hybrid_restarts < 0) return "hybrid_restarts: expected >= 0";
   if (threads < 1) return "threads: expected >= 1";
   if (!(head_ref_mm >= 0.0)) return "head_ref_mm: expected >= 0 (0 = mean head of the data)";
   if (!(head_ref_sub_mm >= 0.0)) return "head_ref_sub_mm: expected >= 0";

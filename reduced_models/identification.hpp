@@ -65,6 +65,7 @@ struct FitOptions {
   double relative_tolerance = 1e-6;  // NLopt xtol_rel and ftol_rel
   int max_evaluations = 2000;        // per NLopt run
   int restarts = 1;                  // NLopt reruns from the best point found
+  int hybrid_restarts = 3;           // the same for the hybrid model (its cost is rougher)
   // Head references H of the nonlinear models (mm); 0 = mean head of the fitted data.
   double head_ref_mm = 0.0;
   double head_ref_sub_mm = 0.0;
