@@ -16,6 +16,11 @@ int main(int argc, char** argv) {
 #ifdef CANALSIM_HAVE_PRBS
   canalsim::cli::add_prbs_command(app);
 #endif
+#ifdef CANALSIM_HAVE_FIT
+  canalsim::cli::add_fit_command(app);
+#endif
+  canalsim::cli::add_scenarios_command(app);
+  canalsim::cli::add_simulate_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

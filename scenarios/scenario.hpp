@@ -31,6 +31,7 @@ struct PoolSpec {
   double bed_elevation_m = 0.0;     // bed elevation at the pool's upstream end
   double manning_n = 0.010;         // s m^-1/3
   int cells = 100;
+  double initial_depth_m = 0.0;     // first guess of the steady state; 0 = from the boundaries
   std::vector<OfftakeSpec> offtakes;
 };
 
@@ -57,7 +58,7 @@ struct UpstreamSpec {
   double discharge_m3s = 0.0;       // discharge: fixed inflow into the first pool
   // Reservoir with a pump under PID level control (the laboratory's upstream pool).
   double plan_area_m2 = 0.05;
-  double pump_m3s_per_hz = 2.0e-5;  // pump flow per Hz of drive frequency
+  double pump_m3s_per_hz = 6.0e-5;  // pump flow per Hz of drive frequency (3 L/s at 50 Hz)
   double max_frequency_hz = 50.0;
   double pid_kp = 2000.0;           // Hz per m of level error
   double pid_ti_s = 5.0;            // integral time

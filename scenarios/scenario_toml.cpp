@@ -42,6 +42,7 @@ PoolSpec read_pool(TomlTable t) {
   p.bed_elevation_m = t.number("bed_elevation_m", p.bed_elevation_m, {-1.0e4, 1.0e4}, "m");
   p.manning_n = t.number("manning_n", p.manning_n, {0.0, 0.2}, "s m^-1/3");
   p.cells = t.integer("cells", p.cells, 4, 1000000);
+  p.initial_depth_m = t.number("initial_depth_m", p.initial_depth_m, {0.0, p.wall_height_m}, "m (0 = automatic)");
   for (auto o : t.tables("offtakes")) {
     OfftakeSpec off;
     off.x_m = o.required_number("x_m", {0.0, p.length_m}, "m (inside the pool)");

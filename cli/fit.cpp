@@ -1,0 +1,289 @@
+// `canalsim fit --model M REC.csv... [--nominal] [--gamma 0:10:0.05] [--json FILE]`: fits a
+// reduced model (paper Section 3) to recordings by minimising IAE (eq. 20), prints a table of
+// parameters, IAE and Nrmse (eq. 19) per recording, and optionally writes everything — parameters,
+// indexes, fitted responses, γ curves — as JSON.
+//
+//   per recording : one fit each (on two threads), or with --gamma a γ sweep each (Figs. 8, 10)
+//   --nominal     : also one model for all recordings, minimising IAE_c (eq. 21), and the
+//                   uncertainty index Δp (eq. 22) of the per-recording parameters
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "reduced_models/identification.hpp"
+#include "scenarios/recording.hpp"
+
+namespace canalsim::cli {
+namespace {
+
+using namespace canalsim::reduced;
+
+struct FitArguments {
+  std::string model;
+  std::vector<std::string> recordings;
+  bool nominal = false;
+  std::string gamma;
+  std::string json;
+  std::optional<double> upstream_level_mm;
+  double quantum_mm = 0.0;
+  double gate_speed_mm_s = 0.0;
+  std::string memory = "short";
+  std::size_t memory_terms = 500;
+  unsigned threads = 2;
+};
+
+// Progress on stderr once an operation has run for more than a second: one line per message,
+// at most twice a second.
+class ProgressLine {
+ public:
+  ProgressLine() : start_(std::chrono::steady_clock::now()) {}
+  void operator()(const std::string& message) {
+    std::lock_guard lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - start_ < std::chrono::seconds(1)) return;
+    if (shown_ && now - last_ < std::chrono::milliseconds(500)) return;
+    last_ = now;
+    shown_ = true;
+    std::fprintf(stderr, "canalsim fit: %s\n", message.c_str());
+  }
+
+ private:
+  std::mutex mutex_;
+  std::chrono::steady_clock::time_point start_, last_;
+  bool shown_ = false;
+};
+
+std::string fixed(double v, int digits) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
+  return buffer;
+}
+
+std::string basename_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+nlohmann::json parameters_json(const Model& m) {
+  nlohmann::json p;
+  for (const auto& name : parameter_names(m.kind)) p[name] = get_parameter(m.p, name);
+  if (uses_upstream_level(m.kind)) {
+    p["head_ref_mm"] = m.p.head_ref_mm;
+    p["K_paper"] = paper_gain(m);
+    if (m.kind == ModelKind::hybrid) p["head_ref_sub_mm"] = m.p.head_ref_sub_mm;
+  }
+  return p;
+}
+
+nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& data,
+                        const std::vector<std::size_t>& which) {
+  nlohmann::json j;
+  j["parameters"] = parameters_json(r.model);
+  j["iae_total"] = r.iae_total;
+  j["evaluations"] = r.evaluations;
+  j["converged"] = r.converged;
+  j["message"] = r.message;
+  nlohmann::json per = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.sources.size(); ++i) {
+    const auto& d = data[which[i]];
+    per.push_back({{"recording", r.sources[i]},
+                   {"iae", r.iae[i]},
+                   {"nrmse", r.nrmse[i]},
+                   {"u0_mm", d.u0_mm},
+                   {"y0_mm", d.y0_mm},
+                   {"t_s", d.t_s},
+                   {"y_dwe_mm", d.y_dwe_mm},
+                   {"model_y_dwe_mm", r.response[i]}});
+  }
+  j["recordings"] = per;
+  return j;
+}
+
+void print_table(const std::string& title, const std::vector<std::string>& names,
+                 const std::vector<std::pair<std::string, const FitResult*>>& rows) {
+  std::cout << title << "\n";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "  %-22s", "recording");
+  std::cout << buffer;
+  for (const auto& n : names) {
+    std::snprintf(buffer, sizeof buffer, " %10s", n.c_str());
+    std::cout << buffer;
+  }
+  std::cout << "  " << std::string(10 - 3, ' ') << "IAE" << "     Nrmse\n";
+  for (const auto& [label, r] : rows) {
+    std::snprintf(buffer, sizeof buffer, "  %-22s", label.substr(0, 22).c_str());
+    std::cout << buffer;
+    for (const auto& n : names) {
+      std::snprintf(buffer, sizeof buffer, " %10.4g", get_parameter(r->model.p, n));
+      std::cout << buffer;
+    }
+    std::snprintf(buffer, sizeof buffer, "  %10.4g  %7.2f%%", r->iae.front(), r->nrmse.front());
+    std::cout << buffer << (r->converged ? "" : "  (" + r->message + ")") << "\n";
+  }
+}
+
+void run_fit(const FitArguments& args) {
+  const auto kind = parse_model_kind(args.model);
+  if (!kind) {
+    throw InputError("--model " + args.model +
+                     ": unknown model (expected liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, "
+                     "nlfom-s or hybrid)");
+  }
+  std::optional<GammaGrid> grid;
+  if (!args.gamma.empty()) {
+    grid = GammaGrid::parse(args.gamma);
+    if (!uses_gamma(*kind)) {
+      throw InputError("--gamma: model " + model_name(*kind) +
+                       " has no gamma (the sweep applies to nliom-f, nlfom-f, nliom-s, nlfom-s, "
+                       "hybrid)");
+    }
+  }
+  if (args.memory != "short" && args.memory != "full") {
+    throw InputError("--memory " + args.memory + ": expected short or full");
+  }
+  DataOptions data_options;
+  data_options.upstream_level_mm = args.upstream_level_mm;
+  std::vector<ExperimentData> data;
+  for (const auto& file : args.recordings) {
+    data.push_back(load_experiment(file, data_options));
+    if (uses_upstream_level(*kind)) require_upstream_level(data.back(), model_name(*kind));
+  }
+
+  ProgressLine progress;
+  FitOptions options;
+  options.actuation.quantum_mm = args.quantum_mm;
+  options.actuation.gate_speed_mm_s = args.gate_speed_mm_s;
+  options.simulation.gl.memory = args.memory == "full" ? GlMemory::full : GlMemory::short_memory;
+  options.simulation.gl.memory_terms = args.memory_terms;
+  options.threads = args.threads;
+  options.progress = [&progress](const std::string& line) { progress(line); };
+  if (const auto why = options.validate(); !why.empty()) throw InputError(why);
+
+  // Per-recording fits.
+  std::vector<FitResult> fits;
+  std::vector<GammaSweep> sweeps;
+  if (grid) {
+    for (std::size_t j = 0; j < data.size(); ++j) {
+      sweeps.push_back(gamma_sweep(*kind, {data[j]}, options, *grid));
+      fits.push_back(sweeps.back().best_fit);
+      progress("gamma sweep done for " + data[j].source);
+    }
+  } else {
+    fits = fit_each(*kind, data, options);
+  }
+  std::optional<FitResult> nominal;
+  std::optional<GammaSweep> nominal_sweep;
+  if (args.nominal) {
+    if (grid) {
+      nominal_sweep = gamma_sweep(*kind, data, options, *grid);
+      nominal = nominal_sweep->best_fit;
+    } else {
+      nominal = fit_nominal(*kind, data, options);
+    }
+    progress("nominal model done");
+  }
+
+  // Table.
+  const auto names = parameter_names(*kind);
+  std::vector<std::pair<std::string, const FitResult*>> rows;
+  for (const auto& f : fits) rows.emplace_back(basename_of(f.sources.front()), &f);
+  print_table(model_name(*kind) + " fits (IAE in mm s, Nrmse eq. 19" +
+                  (grid ? ", gamma by best Nrmse over " + args.gamma : std::string()) + ")",
+              names, rows);
+  std::map<std::string, double> dp;
+  if (nominal) {
+    std::vector<FitResult> per(nominal->sources.size());
+    std::vector<std::pair<std::string, const FitResult*>> nominal_rows;
+    for (std::size_t j = 0; j < per.size(); ++j) {
+      per[j].model = nominal->model;
+      per[j].iae = {nominal->iae[j]};
+      per[j].nrmse = {nominal->nrmse[j]};
+      per[j].converged = nominal->converged;
+      per[j].message = nominal->message;
+    }
+    for (std::size_t j = 0; j < per.size(); ++j) {
+      nominal_rows.emplace_back("nominal @ " + basename_of(nominal->sources[j]), &per[j]);
+    }
+    print_table("nominal model (minimises IAE_c, eq. 21; IAE_c = " + fixed(nominal->iae_total, 4) +
+                    ")",
+                names, nominal_rows);
+    std::vector<Model> models;
+    for (const auto& f : fits) models.push_back(f.model);
+    dp = uncertainty_indices(models, nominal->model);
+    std::cout << "  uncertainty index dp (eq. 22):";
+    for (const auto& n : names) std::cout << "  " << n << " " << fixed(100.0 * dp[n], 2) << "%";
+    std::cout << "\n";
+  }
+
+  if (args.json.empty()) return;
+  nlohmann::json out;
+  out["model"] = model_name(*kind);
+  out["options"] = {{"quantum_mm", args.quantum_mm},
+                    {"gate_speed_mm_s", args.gate_speed_mm_s},
+                    {"gl_memory", args.memory},
+                    {"gl_memory_terms", args.memory_terms},
+                    {"cost", "IAE (eq. 20); nominal IAE_c (eq. 21)"}};
+  if (grid) out["options"]["gamma_grid"] = {grid->first, grid->last, grid->step};
+  nlohmann::json fits_json = nlohmann::json::array();
+  for (std::size_t j = 0; j < fits.size(); ++j) {
+    auto f = fit_json(fits[j], data, {j});
+    if (grid) f["gamma_sweep"] = {{"gamma", sweeps[j].gamma}, {"nrmse", sweeps[j].nrmse}, {"iae", sweeps[j].iae}};
+    fits_json.push_back(std::move(f));
+  }
+  out["fits"] = fits_json;
+  if (nominal) {
+    std::vector<std::size_t> all(data.size());
+    for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
+    auto n = fit_json(*nominal, data, all);
+    if (nominal_sweep) {
+      n["gamma_sweep"] = {{"gamma", nominal_sweep->gamma}, {"nrmse", nominal_sweep->nrmse}, {"iae", nominal_sweep->iae}};
+    }
+    out["nominal"] = n;
+    out["uncertainty_index"] = dp;
+  }
+  write_file_atomically(args.json, out.dump(1) + "\n");
+  std::cout << "wrote " << args.json << "\n";
+}
+
+}  // namespace
+
+void add_fit_command(CLI::App& app) {
+  auto args = std::make_shared<FitArguments>();
+  auto* cmd = app.add_subcommand(
+      "fit", "Fit a reduced model (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid) "
+             "to recordings by minimising IAE");
+  cmd->add_option("--model,-m", args->model, "Model to fit")->required();
+  cmd->add_option("recordings", args->recordings, "Recording CSV files (t_s, u_mm, y_dwe_mm; "
+                                                  "y_up_mm for the nonlinear models)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--nominal", args->nominal,
+                "Also fit one nominal model to all recordings (IAE_c, eq. 21) and report dp (eq. 22)");
+  cmd->add_option("--gamma", args->gamma,
+                  "Sweep gamma over first:last:step (e.g. 0:10:0.05) and keep the best Nrmse");
+  cmd->add_option("--json", args->json, "Write parameters, IAE, Nrmse and responses as JSON");
+  cmd->add_option("--upstream-level", args->upstream_level_mm,
+                  "Constant upstream level in mm for recordings without y_up_mm");
+  cmd->add_option("--quantum", args->quantum_mm,
+                  "Sensor resolution in mm included in the model output (eq. 17; 0 = off)");
+  cmd->add_option("--gate-speed", args->gate_speed_mm_s,
+                  "Gate speed in mm/s for the rate limit (eq. 16; 0 = off)");
+  cmd->add_option("--memory", args->memory, "GL memory: short (N terms, paper) or full")
+      ->capture_default_str();
+  cmd->add_option("--memory-terms", args->memory_terms, "N for the short memory (paper: 500)")
+      ->capture_default_str();
+  cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str();
+  cmd->callback([args] { run_fit(*args); });
+}
+
+}  // namespace canalsim::cli

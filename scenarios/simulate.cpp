@@ -1,0 +1,316 @@
+#include "scenarios/simulate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "scenarios/prbs.hpp"
+#include "scenarios/sensors.hpp"
+#include "scenarios/signals.hpp"
+
+namespace canalsim::scenarios {
+namespace {
+
+constexpr double kMm = 1e-3;
+
+std::string format_number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
+solver::SolverOptions solver_options(const NumericsSpec& n) {
+  solver::SolverOptions o;
+  o.cfl = n.cfl;
+  o.order = n.order == 1 ? solver::SpatialOrder::first : solver::SpatialOrder::second;
+  o.dry_depth = std::min(n.dry_depth_m, 0.01);
+  return o;
+}
+
+gates::GateGeometry gate_geometry(const GateSpec& g) {
+  gates::GateGeometry geometry;
+  geometry.width = g.width_m;
+  geometry.law.law = g.law == GateLaw::swamee ? gates::GateLaw::swamee : gates::GateLaw::simple;
+  // One meaning for both laws: a multiplier on the published coefficient (Swamee's; Cd = 0.6 of
+  // the paper's eq. 9/11).
+  geometry.law.discharge_coefficient_multiplier = g.discharge_coefficient;
+  geometry.law.leakage_opening = g.leakage_m;
+  return geometry;
+}
+
+double automatic_initial_depth(const Scenario& s, const PoolSpec& pool) {
+  if (pool.initial_depth_m > 0.0) return pool.initial_depth_m;
+  if (s.head_gate) return std::min(0.85 * s.upstream.level_m, 0.9 * pool.wall_height_m);
+  if (s.downstream.kind == DownstreamKind::level) return s.downstream.level_m;
+  return 0.5 * pool.wall_height_m;
+}
+
+solver::ReachSpec reach_spec(const Scenario& s, const PoolSpec& pool) {
+  solver::ReachSpec r;
+  r.name = pool.name;
+  r.length = pool.length_m;
+  r.cells = pool.cells;
+  r.section = {pool.bottom_width_m, pool.side_slope};
+  r.manning_n = pool.manning_n;
+  const double dx = pool.length_m / pool.cells;
+  r.bed_elevation.resize(static_cast<std::size_t>(pool.cells));
+  for (int i = 0; i < pool.cells; ++i) {
+    r.bed_elevation[static_cast<std::size_t>(i)] = pool.bed_elevation_m - pool.bed_slope * (i + 0.5) * dx;
+  }
+  r.initial_depth.assign(static_cast<std::size_t>(pool.cells), automatic_initial_depth(s, pool));
+  return r;
+}
+
+void apply_offtakes(solver::Reach& reach, const PoolSpec& pool) {
+  const double dx = reach.cell_length();
+  for (const auto& off : pool.offtakes) {
+    const int cell = std::clamp(static_cast<int>(off.x_m / dx), 0, reach.cells() - 1);
+    reach.lateral_inflow()[static_cast<std::size_t>(cell)] -= off.discharge_m3s / dx;
+  }
+}
+
+std::shared_ptr<gates::GateOperation> operation_for(const GateSpec& g,
+                                                    const std::function<double(double)>& command) {
+  if (!g.controlled) return std::make_shared<gates::GateOperation>(g.opening_m, g.max_opening_m);
+  return std::make_shared<gates::GateOperation>(command, g.actuator_speed_m_s, g.max_opening_m,
+                                                command(0.0));
+}
+
+std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const Drive& drive,
+                                           std::shared_ptr<gates::ReservoirSupply>* reservoir) {
+  const UpstreamSpec& u = s.upstream;
+  const bool recorded = u.kind == UpstreamKind::recorded || drive.use_recorded_upstream;
+  if (recorded) {
+    if (!drive.recording) {
+      throw InputError(s.source + ": upstream.kind = \"recorded\" needs a recording with a y_up_mm column to drive it");
+    }
+    const auto series = SeriesSignal::from_recording(*drive.recording, columns::upstream_level);
+    std::vector<double> t = drive.recording->column(columns::time), y(t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) y[i] = series.value(t[i]);
+    return std::make_shared<gates::SeriesLevelSupply>(std::move(t), std::move(y));
+  }
+  if (u.kind == UpstreamKind::reservoir) {
+    gates::ReservoirOptions o;
+    o.plan_area = u.plan_area_m2;
+    o.initial_level = u.level_m;
+    o.setpoint = u.level_m;
+    o.flow_per_hz = u.pump_m3s_per_hz;
+    o.max_frequency = u.max_frequency_hz;
+    o.proportional_gain = u.pid_kp;
+    o.integral_time = u.pid_ti_s;
+    o.derivative_time = u.pid_td_s;
+    if (const std::string problem = o.validate(); !problem.empty()) {
+      throw InputError(s.source + ": upstream: " + problem);
+    }
+    *reservoir = std::make_shared<gates::ReservoirSupply>(o);
+    return *reservoir;
+  }
+  return std::make_shared<gates::FixedLevelSupply>(u.level_m);
+}
+
+std::shared_ptr<solver::Boundary> make_downstream(const Scenario& s, const solver::Reach& last,
+                                                  std::shared_ptr<gates::TailGateBoundary>* tail) {
+  const DownstreamSpec& d = s.downstream;
+  switch (d.kind) {
+    case DownstreamKind::gate: {
+      const double tail_level = d.tail_level_m;
+      *tail = std::make_shared<gates::TailGateBoundary>(
+          gate_geometry(d.gate), [tail_level](double) { return tail_level; },
+          std::make_shared<gates::GateOperation>(d.gate.opening_m, d.gate.max_opening_m));
+      return *tail;
+    }
+    case DownstreamKind::weir: {
+      const double width = d.weir_width_m > 0.0 ? d.weir_width_m : last.section().top_width(0.0);
+      return std::make_shared<gates::WeirBoundary>(d.weir_crest_m, d.weir_coefficient, width);
+    }
+    case DownstreamKind::level:
+      return solver::FixedLevelBoundary::depth(d.level_m);
+  }
+  throw std::logic_error("unknown downstream kind");
+}
+
+void check(const solver::Status& status, const std::string& what) {
+  if (!status) throw std::runtime_error(what + ": " + status.message());
+}
+
+}  // namespace
+
+std::function<double(double)> command_signal(const ExperimentSpec& e, const Drive& drive) {
+  const double op = e.operating_opening_mm * kMm;
+  if (drive.recording) {
+    auto series = std::make_shared<SeriesSignal>(
+        SeriesSignal::from_recording(*drive.recording, columns::gate_command, Interpolation::zero_order_hold));
+    return [series](double t) { return series->value(t); };
+  }
+  const InputSpec& in = e.input;
+  SignalPtr signal;
+  switch (in.kind) {
+    case InputKind::constant: signal = std::make_shared<ConstantSignal>(op); break;
+    case InputKind::prbs: {
+      PrbsOptions o;
+      o.stages = in.prbs_stages;
+      o.clock_period = in.prbs_clock_s;
+      o.amplitude = in.amplitude_mm * kMm;
+      o.operating_point = op;
+      o.seed = in.prbs_seed;
+      signal = std::make_shared<PrbsSignal>(o);
+      break;
+    }
+    case InputKind::step: signal = std::make_shared<StepSignal>(op, in.amplitude_mm * kMm, in.start_s); break;
+    case InputKind::ramp:
+      signal = std::make_shared<RampSignal>(op, in.amplitude_mm * kMm, in.start_s, in.ramp_duration_s);
+      break;
+    case InputKind::file: {
+      const Recording rec = read_recording(in.file);
+      signal = std::make_shared<SeriesSignal>(
+          SeriesSignal::from_recording(rec, columns::gate_command, Interpolation::zero_order_hold));
+      break;
+    }
+  }
+  return [signal](double t) { return signal->value(t); };
+}
+
+BuiltCanal build_canal(const Scenario& s, const ExperimentSpec& e, const Drive& drive) {
+  BuiltCanal b{solver::Canal(solver_options(s.numerics)), {}, {}, {}, {}, {}, {}, 0.0, {}};
+  for (const PoolSpec& pool : s.pools) {
+    check(b.canal.add_reach(reach_spec(s, pool)), s.source + ": pool '" + pool.name + "'");
+    apply_offtakes(b.canal.reach(b.canal.reach_count() - 1), pool);
+  }
+  const auto command = command_signal(e, drive);
+  if (s.head_gate) {
+    b.supply = make_supply(s, drive, &b.reservoir);
+    auto op = operation_for(*s.head_gate, command);
+    b.head_gate = std::make_shared<gates::HeadGateBoundary>(gate_geometry(*s.head_gate), b.supply, op);
+    check(b.canal.set_boundary(0, solver::End::upstream, b.head_gate), s.source + ": head_gate");
+    if (s.head_gate->controlled) {
+      b.controlled = op;
+      b.controlled_max_opening = s.head_gate->max_opening_m;
+      auto gate = b.head_gate;
+      b.controlled_discharge = [gate] { return gate->last_discharge(); };
+    }
+  } else {
+    check(b.canal.set_boundary(0, solver::End::upstream,
+                               solver::FixedDischargeBoundary::constant(s.upstream.discharge_m3s)),
+          s.source + ": upstream");
+  }
+  for (std::size_t i = 0; i < s.gates.size(); ++i) {
+    auto op = operation_for(s.gates[i], command);
+    auto link = std::make_shared<gates::GateLink>(gate_geometry(s.gates[i]), op);
+    b.gate_links.push_back(link);
+    check(b.canal.connect(static_cast<int>(i), static_cast<int>(i) + 1, link),
+          s.source + ": gates[" + std::to_string(i) + "]");
+    if (s.gates[i].controlled) {
+      b.controlled = op;
+      b.controlled_max_opening = s.gates[i].max_opening_m;
+      b.controlled_discharge = [link] { return link->last_discharge(); };
+    }
+  }
+  const int last = b.canal.reach_count() - 1;
+  check(b.canal.set_boundary(last, solver::End::downstream, make_downstream(s, b.canal.reach(last), &b.tail_gate)),
+        s.source + ": downstream");
+  check(b.canal.check_ready(), s.source);
+  return b;
+}
+
+Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
+  BuiltCanal b = build_canal(s, e, options.drive);
+  if (!b.controlled) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");
+  const SensorSpec sensors = e.sensors.value_or(s.sensors);
+
+  // Settle at the operating point: the command holds its t = 0 value before t = 0.
+  const double t_start = -options.settle_time;
+  b.canal.set_time(t_start);
+  b.controlled->reset(t_start, b.controlled->command(t_start));
+  if (b.reservoir && b.head_gate) {
+    const auto& first = b.canal.reach(0);
+    const gates::SluiceGate law(gate_geometry(*s.head_gate).law);
+    const double q = s.head_gate->width_m *
+                     law.discharge(s.upstream.level_m, first.depth(0), b.controlled->opening(t_start));
+    b.reservoir->reservoir().start_at_steady_state(q);
+  }
+  const auto report = [&](double fraction) {
+    if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
+  };
+  const double total = options.settle_time + e.duration_s;
+  const int settle_chunks = 20;
+  for (int k = 1; k <= settle_chunks; ++k) {
+    check(b.canal.advance_to(t_start + options.settle_time * k / settle_chunks), "settling " + e.name);
+    report(options.settle_time * k / settle_chunks / total);
+  }
+  b.canal.set_time(0.0);
+  b.controlled->reset(0.0, b.controlled->opening(0.0));
+
+  // Sampling: every channel read at t_k = k h from the true state, then through its sensor.
+  const double h = sensors.period_s;
+  const auto samples = static_cast<std::size_t>(std::floor(e.duration_s / h + 1e-9)) + 1;
+  const int last = b.canal.reach_count() - 1;
+  const auto& last_reach = b.canal.reach(last);
+  const double x_end = sensors.downstream_sensor_x_m < 0.0
+                           ? last_reach.length() - 0.5 * last_reach.cell_length()
+                           : sensors.downstream_sensor_x_m;
+  const double x_below = std::min(sensors.below_gate_sensor_x_m, b.canal.reach(0).length());
+
+  auto level_sensor = [&](std::uint64_t seed_offset) {
+    SensorOptions o = SensorOptions::defaults_for(SensorKind::level);
+    o.sample_period = h;
+    o.resolution = sensors.resolution_mm * kMm;
+    o.noise_std = sensors.noise_std_mm * kMm;
+    o.delay = sensors.delay_s;
+    o.offset = sensors.offset_mm * kMm;
+    o.seed = sensors.seed + seed_offset;
+    return Sensor(o);
+  };
+  Sensor y_dwe = level_sensor(0), y_dw = level_sensor(1), y_up = level_sensor(2);
+  SensorOptions gate_options = SensorOptions::defaults_for(SensorKind::gate_position);
+  gate_options.sample_period = h;
+  Sensor x_up(gate_options);
+  std::vector<double> t_s, u_mm, q_lps, regime;
+
+  for (std::size_t k = 0; k < samples; ++k) {
+    const double t = static_cast<double>(k) * h;
+    if (k > 0) check(b.canal.advance_to(t), "experiment " + e.name);
+    const double up = b.supply ? b.supply->level(t) : 0.0;
+    const double opening = b.controlled->opening(t);
+    const double end_depth = b.canal.sample(last, x_end, solver::Quantity::depth);
+    y_dwe.observe(t, end_depth);
+    y_dw.observe(t, b.canal.sample(0, x_below, solver::Quantity::depth));
+    y_up.observe(t, up);
+    x_up.observe(t, opening);
+    t_s.push_back(t);
+    u_mm.push_back(b.controlled->command(t) / kMm);
+    q_lps.push_back(b.controlled_discharge() / kMm);
+    const auto r = gates::classify_regime(up, end_depth, opening);
+    regime.push_back(r == gates::GateRegime::submerged || r == gates::GateRegime::closed
+                         ? static_cast<double>(RegimeCode::submerged)
+                         : static_cast<double>(RegimeCode::free));
+    if (k % std::max<std::size_t>(1, samples / 100) == 0) {
+      report((options.settle_time + t) / total);
+    }
+  }
+  report(1.0);
+
+  auto in_mm = [](const std::vector<double>& v) {
+    std::vector<double> out(v.size());
+    std::transform(v.begin(), v.end(), out.begin(), [](double x) { return x / kMm; });
+    return out;
+  };
+  Recording rec;
+  rec.source = s.name + "/" + e.name;
+  rec.set_meta("scenario", s.name);
+  rec.set_meta("experiment", e.name);
+  rec.set_meta("operating_opening_mm", format_number(e.operating_opening_mm));
+  rec.set_meta("sampling_period_s", format_number(h));
+  rec.set_meta("generator", "canalsim simulate");
+  rec.set_column(columns::time, t_s);
+  rec.set_column(columns::gate_command, u_mm);
+  rec.set_column(columns::gate_position, in_mm(x_up.values()));
+  rec.set_column(columns::upstream_level, in_mm(y_up.values()));
+  rec.set_column(columns::level_below_gate, in_mm(y_dw.values()));
+  rec.set_column(columns::level_downstream_end, in_mm(y_dwe.values()));
+  rec.set_column(columns::discharge, q_lps);
+  rec.set_column(columns::regime, regime);
+  return rec;
+}
+
+}  // namespace canalsim::scenarios

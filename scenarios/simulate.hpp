@@ -1,0 +1,69 @@
+// From a scenario to a recording: build the canal (solver reaches, gates, supply, offtakes), bring
+// it to the steady state of its operating point, run an experiment and sample it with the
+// scenario's sensors (docs/recording-format.md).
+//
+//   const Scenario lab = builtin_scenario("lab");
+//   Recording rec = simulate(lab, *lab.find_experiment("op1"));
+//   write_recording("op1.csv", rec);
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gates/structures.hpp"
+#include "scenarios/recording.hpp"
+#include "scenarios/scenario.hpp"
+#include "solver/canal.hpp"
+
+namespace canalsim::scenarios {
+
+// A scenario turned into solver objects, with handles on what the sensors read.
+struct BuiltCanal {
+  solver::Canal canal;
+  std::shared_ptr<gates::Supply> supply;                  // null without a head gate
+  std::shared_ptr<gates::ReservoirSupply> reservoir;      // the supply, when it is a reservoir
+  std::shared_ptr<gates::HeadGateBoundary> head_gate;     // null without a head gate
+  std::vector<std::shared_ptr<gates::GateLink>> gate_links;
+  std::shared_ptr<gates::TailGateBoundary> tail_gate;     // null unless downstream kind = gate
+  std::shared_ptr<gates::GateOperation> controlled;       // the gate the experiment drives
+  double controlled_max_opening = 0.0;
+  // The discharge through the controlled gate over the last step [m³/s].
+  std::function<double()> controlled_discharge;
+};
+
+// What drives an experiment besides its own input: a recording whose u_mm replaces the input
+// signal (and whose y_up_mm feeds the head gate when `use_recorded_upstream`).
+struct Drive {
+  const Recording* recording = nullptr;
+  bool use_recorded_upstream = false;
+};
+
+struct SimulateOptions {
+  // Called with the fraction done in [0, 1], about every 1% of the run.
+  std::function<void(double)> progress;
+  Drive drive;
+  // Settling before t = 0 when the steady-state solve is not used or fails [s].
+  double settle_time = 600.0;
+  bool use_steady_state_solver = true;
+};
+
+// Builds the canal for `experiment` with every gate at its initial/operating opening and the
+// command signal attached (throws InputError naming the scenario key on inconsistent input).
+BuiltCanal build_canal(const Scenario& scenario, const ExperimentSpec& experiment,
+                       const Drive& drive = {});
+
+// The gate command u(t) [m] of an experiment: operating point plus its input signal; the drive
+// recording's u_mm when given.
+std::function<double(double)> command_signal(const ExperimentSpec& experiment, const Drive& drive);
+
+// Runs one experiment and returns its recording (columns t_s, u_mm, x_up_mm, y_up_mm, y_dw_mm,
+// y_dwe_mm, q_lps, regime; the regime by the paper's conditions (8)/(10) on the true levels).
+// Throws InputError on bad input and std::runtime_error naming time and cell when the solver
+// fails.
+Recording simulate(const Scenario& scenario, const ExperimentSpec& experiment,
+                   const SimulateOptions& options = {});
+
+}  // namespace canalsim::scenarios
