@@ -78,16 +78,18 @@ LinkFlux ContinuousLink::flux(const LinkInput& in) const {
   const double z_face = std::max(l.bed, r.bed);
   const double hl = std::max(0.0, l.depth + l.bed - z_face);
   const double hr = std::max(0.0, r.depth + r.bed - z_face);
-  const PointState sl = point_state(in.upstream_section, g, hl, l.velocity());
-  const PointState sr = point_state(in.downstream_section, g, hr, r.velocity());
-  const Flux f = hll_flux(sl, sr);
+  // Each side evaluates the Riemann problem in its own section, so that at rest each sees its own
+  // hydrostatic force (the walls of a width change take the difference); the one mass flux both
+  // sides share is the mean of the two, which keeps the link exactly conservative.
+  const Section& su = in.upstream_section;
+  const Section& sd = in.downstream_section;
+  const Flux fu = hll_flux(point_state(su, g, hl, l.velocity()), point_state(su, g, hr, r.velocity()));
+  const Flux fd = hll_flux(point_state(sd, g, hl, l.velocity()), point_state(sd, g, hr, r.velocity()));
   LinkFlux out;
-  out.mass = f.mass;
-  out.momentum_upstream = f.momentum + g * (in.upstream_section.pressure_integral(l.depth) -
-                                            in.upstream_section.pressure_integral(hl));
-  out.momentum_downstream = f.momentum + g * (in.downstream_section.pressure_integral(r.depth) -
-                                              in.downstream_section.pressure_integral(hr));
-  out.max_speed = f.max_speed;
+  out.mass = 0.5 * (fu.mass + fd.mass);
+  out.momentum_upstream = fu.momentum + g * (su.pressure_integral(l.depth) - su.pressure_integral(hl));
+  out.momentum_downstream = fd.momentum + g * (sd.pressure_integral(r.depth) - sd.pressure_integral(hr));
+  out.max_speed = std::max(fu.max_speed, fd.max_speed);
   return out;
 }
 

@@ -125,7 +125,9 @@ class CriticalDepthBoundary final : public Boundary {
 };
 
 // Continuous channel joining two reaches (possibly different sections and a bed step): HLL with
-// hydrostatic reconstruction between the two adjacent cell averages, as an interior face.
+// hydrostatic reconstruction between the two adjacent face states, as an interior face. With
+// different sections each side solves the Riemann problem in its own section (exact at rest) and
+// the shared mass flux is their mean.
 class ContinuousLink final : public Link {
  public:
   LinkFlux flux(const LinkInput& input) const override;

@@ -25,7 +25,10 @@ namespace canalsim::solver {
 
 enum class End { upstream, downstream };
 
-// The interior cell next to an end face (cell averages).
+// The interior state next to an end face: the adjacent cell's MUSCL reconstruction extrapolated
+// to the face (the cell average at first order or when the neighbour is dry), so that a boundary
+// sees the same depth the cell's own flux balance uses (this keeps lake-at-rest exact next to
+// walls and levels). `bed` is the reconstructed bed at the face, η_face − h_face.
 struct InteriorState {
   double area;       // A [m²]
   double discharge;  // Q [m³/s], positive downstream

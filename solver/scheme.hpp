@@ -34,7 +34,7 @@ struct RectangularOps {
 struct TrapezoidalOps {
   double b, m, g, perimeter_factor;  // perimeter_factor = 2 sqrt(1 + m²)
   double area(double h) const { return h * (b + m * h); }
-  double depth(double a) const { return 2.0 * a / (b + std::sqrt(b * b + 4.0 * m * a)); }
+  double depth(double a) const { return 2.0 * a / std::max(b + std::sqrt(b * b + 4.0 * m * a), 1e-300); }
   double pressure(double h) const { return g * h * h * (0.5 * b + m * h * (1.0 / 3.0)); }
   double celerity(double h) const {
     const double t = b + 2.0 * m * h;

@@ -36,13 +36,20 @@ double Section::characteristic_integral(double h, double gravity) const {
                                               0.3137066458778873, 0.3626837833783620,
                                               0.3626837833783620, 0.3137066458778873,
                                               0.2223810344533745, 0.1012285362903763};
+  // Composite rule on τ-panels that are finer near the bed, where T/A changes fastest for a wide
+  // trapezoid with a narrow bottom (the transition at s ~ b/m).
+  static constexpr std::array<double, 5> edges = {0.0, 0.125, 0.3, 0.6, 1.0};
   double sum = 0.0;
-  for (std::size_t k = 0; k < x.size(); ++k) {
-    const double tau = 0.5 * (x[k] + 1.0);
-    const double s = h * tau * tau;
-    // sqrt(T/A) * τ = sqrt(T τ² / A); A(s)/τ² = h (b + m s) is finite at τ = 0.
-    const double integrand = 2.0 * h * std::sqrt(gravity * top_width(s) / (h * (bottom_width + side_slope * s)));
-    sum += 0.5 * w[k] * integrand;
+  for (std::size_t p = 0; p + 1 < edges.size(); ++p) {
+    const double lo = edges[p], half = 0.5 * (edges[p + 1] - edges[p]);
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      const double tau = lo + half * (x[k] + 1.0);
+      const double s = h * tau * tau;
+      // sqrt(T/A) · 2hτ = 2h sqrt(T / (A/τ²)), and A(s)/τ² = h (b + m s) is finite at τ = 0.
+      const double integrand =
+          2.0 * h * std::sqrt(gravity * top_width(s) / (h * (bottom_width + side_slope * s)));
+      sum += half * w[k] * integrand;
+    }
   }
   return sum;
 }

@@ -13,6 +13,7 @@
 // prismatic channel dI1/dh = A, which is what makes the hydrostatic reconstruction exact at rest.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 namespace canalsim::solver {
@@ -31,8 +32,9 @@ struct Section {
     return h * h * (0.5 * bottom_width + side_slope * h / 3.0);
   }
   double depth(double area_m2) const {
+    // The floor keeps A = 0 in a triangle (b = 0) at h = 0 instead of 0/0.
     return 2.0 * area_m2 /
-           (bottom_width + std::sqrt(bottom_width * bottom_width + 4.0 * side_slope * area_m2));
+           std::max(bottom_width + std::sqrt(bottom_width * bottom_width + 4.0 * side_slope * area_m2), 1e-300);
   }
   double celerity(double h, double gravity) const {
     const double t = top_width(h);
