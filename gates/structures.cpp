@@ -113,6 +113,25 @@ double branch_depth(const Section& s, double g, End end, double w) {
 
 }  // namespace
 
+// Newton from a warm start: the common case (the face state moves little between stages) takes
+// two or three law evaluations. Returns nullopt when Newton leaves the subcritical branch or does
+// not converge quickly; the caller then uses the bracketed solve.
+std::optional<double> newton_from_guess(const std::function<double(double, double*)>& residual,
+                                        double branch, double guess) {
+  if (!(guess > branch)) return std::nullopt;
+  double h = guess;
+  for (int it = 0; it < 8; ++it) {
+    double slope = 0.0;
+    const double r = residual(h, &slope);
+    if (!(slope > 0.0)) return std::nullopt;
+    const double next = h - r / slope;
+    if (!(next > branch)) return std::nullopt;
+    if (std::abs(next - h) <= 1e-13 * h) return next;
+    h = next;
+  }
+  return std::nullopt;
+}
+
 std::optional<double> solve_face_depth(const Section& section, double gravity, End end,
                                        const InteriorState& cell,
                                        const std::function<LawValue(double)>& discharge_law,
@@ -121,13 +140,14 @@ std::optional<double> solve_face_depth(const Section& section, double gravity, E
   // R(h) = allowed(h) - law(h) is monotone on the subcritical branch: increasing at the upstream
   // end (allowed grows with h, the law falls as the tailwater rises), decreasing downstream.
   const double sign = end == End::upstream ? 1.0 : -1.0;
-  auto residual = [&](double h, double* slope) {
+  const std::function<double(double, double*)> residual = [&](double h, double* slope) {
     const Allowed a = allowed_discharge(section, gravity, end, w, h);
     const LawValue l = discharge_law(h);
     if (slope) *slope = sign * (a.dq_dh - l.dq_dh);
     return sign * (a.q - l.q);
   };
   double lo = branch_depth(section, gravity, end, w);
+  if (const auto quick = newton_from_guess(residual, lo, guess)) return quick;
   if (residual(lo, nullptr) > 0.0) return std::nullopt;  // choked: no subcritical face state
   double hi = std::max({2.0 * lo, 2.0 * cell.depth, 1e-4});
   while (residual(hi, nullptr) < 0.0) {
@@ -152,8 +172,22 @@ std::optional<double> solve_face_depth(const Section& section, double gravity, E
 
 double jet_depth(const Section& section, double gravity, double discharge, double energy) {
   const double q = std::abs(discharge);
-  const double hc = section.critical_depth(q, gravity);
   if (q == 0.0) return 0.0;
+  if (section.is_rectangular()) {
+    // E = h + k / h², k = Q² / (2 g b²): the cubic h³ − E h² + k = 0 has three real roots when
+    // k <= 4 E³ / 27 (enough energy to pass Q). By the trigonometric solution they are
+    // h_j = E/3 (1 + 2 cos(θ/3 − 2πj/3)), cos θ = 1 − 27k/(2E³): j = 0 subcritical, j = 1 the
+    // supercritical jet, j = 2 negative.
+    const double b = section.bottom_width;
+    const double k = q * q / (2.0 * gravity * b * b);
+    const double e3 = energy * energy * energy;
+    if (!(energy > 0.0) || 27.0 * k >= 4.0 * e3) return section.critical_depth(q, gravity);
+    const double theta = std::acos(1.0 - 13.5 * k / e3);
+    constexpr double two_pi_over_3 = 2.0943951023931957;
+    const double root = energy / 3.0 * (1.0 + 2.0 * std::cos(theta / 3.0 - two_pi_over_3));
+    return root;
+  }
+  const double hc = section.critical_depth(q, gravity);
   auto specific_energy = [&](double h) {
     const double a = section.area(h);
     return h + q * q / (2.0 * gravity * a * a);
