@@ -42,24 +42,36 @@ struct FitArguments {
   unsigned threads = 2;
 };
 
-// Progress on stderr once an operation has run for more than a second: one line per message,
-// at most twice a second.
+// Progress on stderr once an operation has run for more than a second: on a terminal one line
+// rewritten in place (at most 10 times a second); on a pipe or file a line at most every 5 s.
 class ProgressLine {
  public:
-  ProgressLine() : start_(std::chrono::steady_clock::now()) {}
+  ProgressLine() : start_(std::chrono::steady_clock::now()), tty_(::isatty(STDERR_FILENO) != 0) {}
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+  ~ProgressLine() {
+    if (tty_ && shown_) std::fprintf(stderr, "\n");
+  }
   void operator()(const std::string& message) {
     std::lock_guard lock(mutex_);
     const auto now = std::chrono::steady_clock::now();
     if (now - start_ < std::chrono::seconds(1)) return;
-    if (shown_ && now - last_ < std::chrono::milliseconds(500)) return;
+    const auto gap = tty_ ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
+    if (shown_ && now - last_ < gap) return;
     last_ = now;
     shown_ = true;
-    std::fprintf(stderr, "canalsim fit: %s\n", message.c_str());
+    if (tty_) {
+      std::fprintf(stderr, "\rcanalsim fit: %-60s", message.c_str());
+    } else {
+      std::fprintf(stderr, "canalsim fit: %s\n", message.c_str());
+    }
+    std::fflush(stderr);
   }
 
  private:
   std::mutex mutex_;
   std::chrono::steady_clock::time_point start_, last_;
+  bool tty_;
   bool shown_ = false;
 };
 
