@@ -48,27 +48,42 @@ FaceState solve_face_state(const Section& section, double gravity, End end,
     const double head = std::abs(cell.velocity()) + 2.0 * c;
     max_depth = 4.0 * (cell.depth + head * head / gravity) + 1e-3;
   }
-  constexpr int kScan = 200;
+  // Scan down from max_depth on a geometric grid (48 points over six decades, then 0): the first
+  // sign change is the deepest root. Refine it by the Illinois variant of false position, which
+  // converges superlinearly, falling back on bisection steps (at most 100 iterations).
+  constexpr int kScan = 48;
+  const double ratio = std::pow(1e-6, 1.0 / (kScan - 1));
   FaceState best;
   double best_abs = INFINITY;
   double h_hi = max_depth, r_hi = residual(h_hi);
-  for (int k = kScan - 1; k >= 0; --k) {
-    const double h_lo = max_depth * k / kScan;
+  for (int k = 1; k <= kScan; ++k) {
+    const double h_lo = k == kScan ? 0.0 : max_depth * std::pow(ratio, k);
     const double r_lo = residual(h_lo);
     if (std::abs(r_hi) < best_abs) {
       best_abs = std::abs(r_hi);
       best.depth = h_hi;
     }
     if ((r_lo <= 0.0 && r_hi >= 0.0) || (r_lo >= 0.0 && r_hi <= 0.0)) {
-      double lo = h_lo, hi = h_hi, rlo = r_lo;
-      for (int it = 0; it < 200 && hi - lo > 1e-14 * hi; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        const double rm = residual(mid);
-        if ((rm <= 0.0) == (rlo <= 0.0)) {
+      double lo = h_lo, hi = h_hi, flo = r_lo, fhi = r_hi;
+      int side = 0;
+      for (int it = 0; it < 100 && hi - lo > 1e-14 * hi; ++it) {
+        double mid = (flo != fhi) ? (lo * fhi - hi * flo) / (fhi - flo) : 0.5 * (lo + hi);
+        if (!(mid > lo && mid < hi) || it % 8 == 7) mid = 0.5 * (lo + hi);  // keep the bracket shrinking
+        const double fm = residual(mid);
+        if (fm == 0.0) {
+          lo = hi = mid;
+          break;
+        }
+        if ((fm < 0.0) == (flo < 0.0)) {
           lo = mid;
-          rlo = rm;
+          flo = fm;
+          if (side == -1) fhi *= 0.5;  // Illinois: halve the stale end's value
+          side = -1;
         } else {
           hi = mid;
+          fhi = fm;
+          if (side == 1) flo *= 0.5;
+          side = 1;
         }
       }
       best.depth = 0.5 * (lo + hi);

@@ -67,13 +67,14 @@ struct UpdateResult {
 
 // x^(-1/3) for x > 0 in loops that must vectorise (std::cbrt has no vector version and costs a
 // library call): a bit-level first guess on the float representation (|relative error| < 3.5%),
-// then four Newton steps y ← y (4 − x y³) / 3 for f(y) = y⁻³ − x, which square the error each time
-// (~1e-16 after four) and need no division. x is clamped to [1e-30, 1e30].
+// then three Newton steps y ← y (4 − x y³) / 3 for f(y) = y⁻³ − x, which roughly square the error
+// each time (3.5e-2 → 2.5e-3 → 1.2e-5 → 3e-10) and need no division — far below the uncertainty
+// of any Manning coefficient. x is clamped to [1e-30, 1e30].
 inline double inverse_cube_root_positive(double x) {
   x = std::min(std::max(x, 1e-30), 1e30);
   const std::uint32_t bits = std::bit_cast<std::uint32_t>(static_cast<float>(x));
   double y = static_cast<double>(std::bit_cast<float>(0x54a21d2au - bits / 3u));
-  for (int k = 0; k < 4; ++k) y *= (4.0 - x * y * y * y) * (1.0 / 3.0);
+  for (int k = 0; k < 3; ++k) y *= (4.0 - x * y * y * y) * (1.0 / 3.0);
   return y;
 }
 

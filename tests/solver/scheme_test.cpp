@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "solver/canal.hpp"
+#include "solver/scheme.hpp"
 
 namespace canalsim::solver {
 namespace {
@@ -52,6 +53,23 @@ double max_velocity(const Reach& r) {
     if (r.area()[j] > 0.0) vmax = std::max(vmax, std::abs(r.discharge()[j] / r.area()[j]));
   }
   return vmax;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Building blocks of the kernels.
+
+TEST(Kernels, InverseCubeRootIsAccurateTo1e9OverTwentyDecades) {
+  for (double e = -10.0; e <= 10.0; e += 0.01) {
+    const double x = std::pow(10.0, e);
+    EXPECT_NEAR(inverse_cube_root_positive(x) * std::cbrt(x), 1.0, 1e-9) << "x = " << x;
+  }
+}
+
+TEST(Kernels, GeneralisedMinmodIsZeroAtExtremaAndBetweenTheOneSidedDifferences) {
+  EXPECT_EQ(limited_slope(1.0, 2.0, 1.5, 1.0), 0.0);
+  EXPECT_EQ(limited_slope(1.0, 2.0, 4.0, 1.0), 1.0);
+  EXPECT_EQ(limited_slope(1.0, 2.0, 4.0, 2.0), 1.5);  // centred difference when θ = 2
+  EXPECT_EQ(limited_slope(4.0, 2.0, 1.0, 1.0), -1.0);
 }
 
 // ---------------------------------------------------------------------------------------------
