@@ -133,7 +133,9 @@ void solve_fractional_lag(std::size_t n, double T, double lambda, double h,
     case GlMemory::short_memory: {
       const std::size_t N = terms;
       const auto w = gl_weights(lambda, N + 1);
-      // Reversed weights: wr[i] = w_{N−i}, so s_k = Σ wr[N−m+i] x_{k−m+i}, a contiguous dot.
+      // Reversed weights: wr[i] = w_{N−i}, so s_k = Σ_i wr[N−m+i] x_{k−m+i} is a contiguous dot
+      // product (the hot loop of every fit; Eigen's dot uses vector lanes and several
+      // accumulators).
       Eigen::VectorXd wr(static_cast<Eigen::Index>(N));
       for (std::size_t i = 0; i < N; ++i) wr[static_cast<Eigen::Index>(i)] = w[N - i];
       for (std::size_t k = 0; k < n; ++k) {

@@ -255,7 +255,11 @@ class Problem {
   }
 
   // Stage 2: NLopt from `start` with L bracketed around start.p.L. Returns the best model.
-  Model refine(const Model& start, double& best_cost, bool& converged, std::string& message) {
+  // `step_scale` scales NLopt's initial steps (1 = a fresh search, < 1 = polishing a good start);
+  // `restarts` < 0 takes the count from the options.
+  Model refine(const Model& start, double& best_cost, bool& converged, std::string& message,
+               double step_scale = 1.0, int restarts = -1) {
+    step_scale_ = step_scale;
     Model current = start;
     best_cost = kInf;
     const auto& Lspec = options_.bounds.L;
@@ -266,8 +270,8 @@ class Problem {
       L_hi = std::min(Lspec.upper, L + 2.0 * h0);
     };
     set_bracket(start.p.L);
-    const int runs =
-        1 + std::max(0, kind_ == ModelKind::hybrid ? options_.hybrid_restarts : options_.restarts);
+    const int configured = kind_ == ModelKind::hybrid ? options_.hybrid_restarts : options_.restarts;
+    const int runs = 1 + std::max(0, restarts >= 0 ? restarts : configured);
     int recentre = 0;
     for (int run = 0; run < runs; ++run) {
       const Model before = current;
@@ -327,7 +331,7 @@ class Problem {
       double s = name == "L" ? 0.5 * data_.front()->h : std::max(0.1 * std::abs(x[i]), 0.02 * width);
       if (name == "gamma" || name == "gamma_sub") s = 0.2;
       if (name == "lambda") s = 0.05;
-      step[i] = std::min(s, 0.5 * width);
+      step[i] = std::min(s * step_scale_, 0.5 * width);
       if (step[i] <= 0.0) step[i] = 1e-6;
     }
     nlopt::algorithm algorithm = nlopt::LN_BOBYQA;
@@ -372,8 +376,23 @@ class Problem {
   std::vector<std::string> free_;
   bool profile_K_ = false;
   int evaluations_ = 0;
+  double step_scale_ = 1.0;
   std::vector<double> values_, weights_;
 };
+
+// The first `n` samples of an experiment.
+ExperimentData truncated(const ExperimentData& d, std::size_t n) {
+  ExperimentData out = d;
+  auto cut = [n](std::vector<double>& v) {
+    if (v.size() > n) v.resize(n);
+  };
+  cut(out.t_s);
+  cut(out.u_mm);
+  cut(out.y_dwe_mm);
+  cut(out.y_up_mm);
+  cut(out.x_up_mm);
+  return out;
+}
 
 void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>& data,
                         const FitOptions& options) {
@@ -416,12 +435,28 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
   bool converged = true;
   std::string message;
   double cost = 0.0;
-  // Stages 1–2 on the linear counterpart.
+  // Stages 1–2 on the linear counterpart. Long records are first fitted on their leading
+  // `coarse_samples` samples; the full record then only polishes that fit.
   const ModelKind linear = linear_counterpart(kind);
-  Problem lin(linear, data, options);
-  const Model grid_start = lin.delay_grid();
-  Model linear_fit = lin.refine(grid_start, cost, converged, message);
-  evaluations += lin.evaluations();
+  std::size_t longest = 0;
+  for (const auto* d : data) longest = std::max(longest, d->size());
+  Model linear_fit;
+  if (options.coarse_samples > 0 && longest > 2 * options.coarse_samples) {
+    std::vector<ExperimentData> heads;
+    for (const auto* d : data) heads.push_back(truncated(*d, options.coarse_samples));
+    Problem coarse(linear, pointers(heads), options);
+    const Model grid_start = coarse.delay_grid();
+    const Model coarse_fit = coarse.refine(grid_start, cost, converged, message);
+    evaluations += coarse.evaluations();
+    Problem lin(linear, data, options);
+    linear_fit = lin.refine(coarse_fit, cost, converged, message, 0.1, 0);
+    evaluations += lin.evaluations();
+  } else {
+    Problem lin(linear, data, options);
+    const Model grid_start = lin.delay_grid();
+    linear_fit = lin.refine(grid_start, cost, converged, message);
+    evaluations += lin.evaluations();
+  }
   if (linear == kind) {
     FitResult r = finish(linear_fit, data, options.simulation);
     r.evaluations = evaluations;
@@ -516,32 +551,37 @@ std::string FitOptions::validate() const {
 double weighted_median(std::vector<double>& values, std::vector<double>& weights) {
   const std::size_t n = values.size();
   if (n == 0 || weights.size() != n) throw std::invalid_argument("weighted_median: bad sizes");
-  std::vector<std::size_t> idx(n);
-  for (std::size_t i = 0; i < n; ++i) idx[i] = i;
+  struct Item {
+    double value, weight;
+  };
+  thread_local std::vector<Item> items;
+  items.resize(n);
   double total = 0.0;
-  for (double w : weights) total += w;
+  for (std::size_t i = 0; i < n; ++i) {
+    items[i] = {values[i], weights[i]};
+    total += weights[i];
+  }
   const double half = 0.5 * total;
+  // Quickselect on the value, keeping the weight of everything left of the current range.
   std::size_t lo = 0, hi = n;
-  double left = 0.0;  // weight of everything before lo
-  while (true) {
-    if (hi - lo == 1) return values[idx[lo]];
+  double left = 0.0;
+  while (hi - lo > 1) {
     const std::size_t mid = lo + (hi - lo) / 2;
-    std::nth_element(idx.begin() + static_cast<long>(lo), idx.begin() + static_cast<long>(mid),
-                     idx.begin() + static_cast<long>(hi),
-                     [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+    std::nth_element(items.begin() + static_cast<long>(lo), items.begin() + static_cast<long>(mid),
+                     items.begin() + static_cast<long>(hi),
+                     [](const Item& a, const Item& b) { return a.value < b.value; });
     double below = 0.0;
-    for (std::size_t i = lo; i < mid; ++i) below += weights[idx[i]];
-    const double at = weights[idx[mid]];
+    for (std::size_t i = lo; i < mid; ++i) below += items[i].weight;
     if (left + below > half) {
       hi = mid;
-    } else if (left + below + at >= half) {
-      return values[idx[mid]];
+    } else if (left + below + items[mid].weight >= half) {
+      return items[mid].value;
     } else {
-      left += below + at;
+      left += below + items[mid].weight;
       lo = mid + 1;
-      if (lo >= hi) return values[idx[hi - 1]];
     }
   }
+  return items[lo < n ? lo : n - 1].value;
 }
 
 FitResult fit(ModelKind kind, const ExperimentData& data, const FitOptions& options) {

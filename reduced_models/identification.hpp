@@ -62,10 +62,13 @@ struct FitOptions {
   // GL memory used while fitting (paper: short memory, N = 500).
   SimulationOptions simulation;
   Optimizer optimizer = Optimizer::bobyqa;
-  double relative_tolerance = 1e-6;  // NLopt xtol_rel and ftol_rel
+  double relative_tolerance = 1e-4;  // NLopt xtol_rel and ftol_rel
   int max_evaluations = 2000;        // per NLopt run
   int restarts = 1;                  // NLopt reruns from the best point found
   int hybrid_restarts = 3;           // the same for the hybrid model (its cost is rougher)
+  // Records longer than twice this are first fitted on their leading `coarse_samples` samples
+  // (delay grid and search), then polished on the whole record; 0 = always the whole record.
+  std::size_t coarse_samples = 4000;
   // Head references H of the nonlinear models (mm); 0 = mean head of the fitted data.
   double head_ref_mm = 0.0;
   double head_ref_sub_mm = 0.0;
