@@ -446,7 +446,8 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
     for (const auto* d : data) heads.push_back(truncated(*d, options.coarse_samples));
     Problem coarse(linear, pointers(heads), options);
     const Model grid_start = coarse.delay_grid();
-    const Model coarse_fit = coarse.refine(grid_start, cost, converged, message);
+    // No restart here: the polish on the whole record that follows plays its part.
+    const Model coarse_fit = coarse.refine(grid_start, cost, converged, message, 1.0, 0);
     evaluations += coarse.evaluations();
     Problem lin(linear, data, options);
     linear_fit = lin.refine(coarse_fit, cost, converged, message, 0.1, 0);
