@@ -18,7 +18,7 @@ Reach::Reach(const ReachSpec& spec)
     if (!spec.initial_discharge.empty()) discharge_[i] = spec.initial_discharge[i];
   }
   lateral_inflow_.assign(n, 0.0);
-  for (auto* v : {&area0_, &discharge0_, &h_, &u_, &eta_, &dh_, &du_, &deta_}) v->assign(n, 0.0);
+  for (auto* v : {&area0_, &discharge0_, &h_, &u_, &eta_, &dh_, &du_, &deta_, &inv_area_}) v->assign(n, 0.0);
   for (auto* v : {&face_mass_, &face_momentum_left_, &face_momentum_right_}) v->assign(n + 1, 0.0);
 }
 

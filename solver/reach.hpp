@@ -54,7 +54,7 @@ class Reach {
   // Scheme work arrays (see scheme in canal.cpp): start-of-step state, primitive variables and
   // their limited slopes per cell, fluxes per face (cells + 1 faces; face f is left of cell f).
   std::vector<double> area0_, discharge0_;
-  std::vector<double> h_, u_, eta_, dh_, du_, deta_;
+  std::vector<double> h_, u_, eta_, dh_, du_, deta_, inv_area_;
   std::vector<double> face_mass_, face_momentum_left_, face_momentum_right_;
 };
 

@@ -27,6 +27,7 @@ struct ReachKernels {
     double* __restrict h = r.h_.data();
     double* __restrict u = r.u_.data();
     double* __restrict eta = r.eta_.data();
+    double* __restrict inv_a = r.inv_area_.data();
     double* __restrict dh = r.dh_.data();
     double* __restrict du = r.du_.data();
     double* __restrict deta = r.deta_.data();
@@ -36,9 +37,10 @@ struct ReachKernels {
       const double hi = std::max(ops.depth(a[i]), 0.0);
       h[i] = hi;
       // Divide unconditionally (guarded denominator) and select: a conditional division would
-      // stop the loop from vectorising.
-      const double velocity = q[i] / std::max(a[i], 1e-300);
-      u[i] = hi > dry ? velocity : 0.0;
+      // stop the loop from vectorising. 1/A is kept for the friction term of the update.
+      const double inverse_area = 1.0 / std::max(a[i], 1e-300);
+      inv_a[i] = inverse_area;
+      u[i] = hi > dry ? q[i] * inverse_area : 0.0;
       eta[i] = z[i] + hi;
     }
     if (s.second_order) {
@@ -91,7 +93,7 @@ struct ReachKernels {
   template <class Ops, bool kFriction>
   [[gnu::always_inline]] static inline UpdateResult update(Reach& r, const Ops& ops, const UpdateSettings& s) {
     return update_loop<Ops, kFriction>(r.cells_, r.area_.data(), r.discharge_.data(), r.area0_.data(),
-                                       r.discharge0_.data(), r.h_.data(), r.u_.data(), r.dh_.data(),
+                                       r.discharge0_.data(), r.h_.data(), r.inv_area_.data(), r.u_.data(), r.dh_.data(),
                                        r.deta_.data(), r.lateral_inflow_.data(), r.face_mass_.data(),
                                        r.face_momentum_left_.data(), r.face_momentum_right_.data(), ops,
                                        s.dt, s.dt / r.dx_, s.alpha, s.dry_depth, s.friction);
@@ -103,7 +105,8 @@ struct ReachKernels {
   template <class Ops, bool kFriction>
   [[gnu::always_inline]] static inline UpdateResult update_loop(
       const int n, double* __restrict a, double* __restrict q, const double* __restrict a0,
-      const double* __restrict q0, const double* __restrict h, const double* __restrict u,
+      const double* __restrict q0, const double* __restrict h, const double* __restrict inv_a,
+      const double* __restrict u,
       const double* __restrict dh, const double* __restrict deta, const double* __restrict ql,
       const double* __restrict fm, const double* __restrict fl, const double* __restrict fr,
       const Ops ops, const double dt, const double dt_dx, const double alpha, const double dry,
@@ -123,13 +126,14 @@ struct ReachKernels {
       if constexpr (kFriction) {
         // k from the stage's own state (not Q*): a steady state then satisfies the discrete
         // momentum balance L(U) = k(U) Q exactly, for any dt.
-        // Q* / (1 + dt k), k = g n² |Q| / (A R^{4/3}), written as Q* A / (A + dt g n² |Q| R^{-4/3})
-        // with R^{-1/3} from a division-free inverse cube root: two divisions per cell.
-        const double radius = a[i] / ops.perimeter(h[i]);
-        const double r13 = inverse_cube_root_positive(radius);
-        const double r43 = (r13 * r13) * (r13 * r13);
-        const double drag = h[i] > dry ? dt * friction * std::abs(q[i]) * r43 : 0.0;
-        q_star = q_star * a[i] / std::max(a[i] + drag, 1e-300);
+        // Q* / (1 + dt k), k = g n² |Q| R^{-4/3} / A, with a division-free inverse cube root.
+        // With ρ = P/A = 1/R (from the stored 1/A): R^{-4/3} = ρ^{4/3} = ρ² (ρ^{-1/3})², so the
+        // whole term costs one division.
+        const double rho = ops.perimeter(h[i]) * inv_a[i];
+        const double rho_m13 = inverse_cube_root_positive(rho);
+        const double rho43 = rho * rho * (rho_m13 * rho_m13);
+        const double k_dt = h[i] > dry ? dt * friction * std::abs(q[i]) * rho43 * inv_a[i] : 0.0;
+        q_star = q_star / (1.0 + k_dt);
       }
       q_star = a_star > dry_area ? q_star : 0.0;  // same as h(A*) > dry, without a square root
       const double a_new = alpha * a0[i] + beta * a_star;
