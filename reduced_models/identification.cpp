@@ -628,9 +628,10 @@ std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData
   return results;
 }
 
-FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data,
-                     const FitOptions& options) {
-  const auto ptrs = pointers(data);
+namespace {
+
+FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*>& ptrs,
+                     const FitOptions& options, double step_scale, int restarts) {
   check_data_for_fit(start.kind, ptrs, options);
   Problem problem(start.kind, ptrs, options);
   Model s = problem.base();
@@ -642,12 +643,19 @@ FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data
   double cost = 0.0;
   bool converged = true;
   std::string message;
-  const Model best = problem.refine(s, cost, converged, message);
+  const Model best = problem.refine(s, cost, converged, message, step_scale, restarts);
   FitResult r = finish(best, ptrs, options.simulation);
   r.evaluations = problem.evaluations();
   r.converged = converged;
   r.message = message;
   return r;
+}
+
+}  // namespace
+
+FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data,
+                     const FitOptions& options) {
+  return refit_impl(start, pointers(data), options, 1.0, -1);
 }
 
 std::vector<double> GammaGrid::values() const {
@@ -712,7 +720,8 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
           Model start = *previous;
           start.p.gamma = sweep.gamma[i];
           if (kind == ModelKind::hybrid) start.p.gamma_sub = sweep.gamma[i];
-          fits[i] = refit_from(start, data, o);
+          // Neighbouring γ: polish the previous fit (small steps, one optimiser run).
+          fits[i] = refit_impl(start, pointers(data), o, 0.2, 0);
         }
         previous = fits[i].model;
         const std::size_t count = ++done;

@@ -64,6 +64,30 @@ void BM_NlfomSFit(benchmark::State& state) {
 }
 BENCHMARK(BM_NlfomSFit)->Arg(2044)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// A γ sweep over the paper's grid 0:10:0.05 (201 fits) of NLFOM-F on one PRBS period, on two
+// threads (the CLI's `--gamma 0:10:0.05`).
+void BM_GammaSweepNlfomF(benchmark::State& state) {
+  Model truth{ModelKind::nlfom_f, {}, {}};
+  truth.p.K = 0.78;
+  truth.p.T = 0.77;
+  truth.p.lambda = 0.57;
+  truth.p.gamma = 3.25;
+  truth.p.L = 4.9;
+  truth.p.head_ref_mm = 60.0;
+  const std::vector<ExperimentData> data{
+      prepare_data(testing::synthetic_recording(truth, testing::SyntheticSpec{}))};
+  FitOptions options;
+  options.head_ref_mm = 60.0;
+  options.threads = 2;
+  double best = 0.0;
+  for (auto _ : state) {
+    const auto sweep = gamma_sweep(ModelKind::nlfom_f, data, options, GammaGrid{0.0, 10.0, 0.05});
+    best = sweep.gamma[sweep.best];
+  }
+  state.counters["best_gamma"] = best;
+}
+BENCHMARK(BM_GammaSweepNlfomF)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
 void gl(benchmark::State& state, GlMemory memory) {
   const auto n = static_cast<std::size_t>(state.range(0));
   std::mt19937 rng(1);
