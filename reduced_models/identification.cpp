@@ -1,6 +1,7 @@
 #include "reduced_models/identification.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -73,6 +74,7 @@ class Problem {
   const std::vector<std::string>& free_names() const { return free_; }
   Model& base() { return base_; }
   int evaluations() const { return evaluations_; }
+  int simulations() const { return simulations_; }
 
   // Cost (IAE or IAE_c) of the model `m`; with K profiled, m.p.K is set to the optimal gain.
   double cost(Model& m) {
@@ -81,6 +83,7 @@ class Problem {
       double total = 0.0;
       for (std::size_t j = 0; j < data_.size(); ++j) {
         const auto y = simulate(m, *data_[j], options_.simulation).y_dwe_mm;
+        ++simulations_;
         total += iae(y, data_[j]->y_dwe_mm, data_[j]->h);
       }
       return total;
@@ -91,11 +94,48 @@ class Problem {
     std::vector<std::vector<double>> g(data_.size());
     values_.clear();
     weights_.clear();
+    // Linear time-invariant models: the GL recursion and the interpolating delay commute, so the
+    // undelayed unit responses of the last few (T, λ, T2) are cached and only re-delayed when
+    // just L changes (as in BOBYQA's initial design and line steps along L).
+    const bool lti = is_linear_time_invariant(kind_);
+    const std::vector<std::vector<double>>* undelayed_responses = nullptr;
+    if (lti) {
+      const std::array<double, 3> key{m.p.T, m.p.lambda, m.p.T2};
+      for (auto& entry : cache_) {
+        if (entry.key == key) {
+          entry.last_use = ++cache_clock_;
+          undelayed_responses = &entry.responses;
+        }
+      }
+      if (!undelayed_responses) {
+        if (cache_.size() < kCacheEntries) cache_.emplace_back();
+        auto& entry = *std::min_element(cache_.begin(), cache_.end(),
+                                        [](const CacheEntry& a, const CacheEntry& b) {
+                                          return a.last_use < b.last_use;
+                                        });
+        Model undelayed = unit;
+        undelayed.p.L = 0.0;
+        entry.key = key;
+        entry.last_use = ++cache_clock_;
+        entry.responses.resize(data_.size());
+        for (std::size_t j = 0; j < data_.size(); ++j) {
+          entry.responses[j] = simulate(undelayed, *data_[j], options_.simulation).y_dwe_mm;
+          ++simulations_;
+          for (double& v : entry.responses[j]) v -= data_[j]->y0_mm;
+        }
+        undelayed_responses = &entry.responses;
+      }
+    }
     for (std::size_t j = 0; j < data_.size(); ++j) {
       const auto& d = *data_[j];
-      g[j] = simulate(unit, d, options_.simulation).y_dwe_mm;
+      if (lti) {
+        fractional_delay((*undelayed_responses)[j], m.p.L / d.h, g[j]);
+      } else {
+        g[j] = simulate(unit, d, options_.simulation).y_dwe_mm;
+        ++simulations_;
+        for (double& v : g[j]) v -= d.y0_mm;
+      }
       for (std::size_t k = 0; k < d.size(); ++k) {
-        g[j][k] -= d.y0_mm;
         if (g[j][k] != 0.0) {
           values_.push_back(residual_[j][k] / g[j][k]);
           weights_.push_back(d.h * std::abs(g[j][k]));
@@ -149,6 +189,7 @@ class Problem {
         std::vector<std::vector<double>> g;
         for (const auto* d : data_) {
           auto y = simulate(m, *d, options_.simulation).y_dwe_mm;
+          ++simulations_;
           for (double& v : y) v -= d->y0_mm;
           g.push_back(std::move(y));
         }
@@ -342,8 +383,14 @@ class Problem {
     nlopt::opt opt(algorithm, static_cast<unsigned>(dim));
     opt.set_lower_bounds(lo);
     opt.set_upper_bounds(hi);
-    opt.set_xtol_rel(options_.relative_tolerance);
-    opt.set_ftol_rel(options_.relative_tolerance);
+    // A polish (step_scale < 1) starts within about a percent of the optimum: a tolerance ten
+    // times looser (but not looser than 1e-3) is enough there.
+    const double tolerance = step_scale_ < 1.0
+                                 ? std::max(options_.relative_tolerance,
+                                            std::min(1e-3, 10.0 * options_.relative_tolerance))
+                                 : options_.relative_tolerance;
+    opt.set_xtol_rel(tolerance);
+    opt.set_ftol_rel(tolerance);
     opt.set_maxeval(options_.max_evaluations);
     opt.set_initial_step(step);
     struct Context {
@@ -376,7 +423,16 @@ class Problem {
   std::vector<std::string> free_;
   bool profile_K_ = false;
   int evaluations_ = 0;
+  int simulations_ = 0;  // model simulations (one per recording per evaluation, fewer if cached)
   double step_scale_ = 1.0;
+  struct CacheEntry {
+    std::array<double, 3> key{};                  // (T, λ, T2)
+    std::vector<std::vector<double>> responses;   // undelayed unit responses per recording
+    unsigned long last_use = 0;
+  };
+  static constexpr std::size_t kCacheEntries = 4;
+  std::vector<CacheEntry> cache_;
+  unsigned long cache_clock_ = 0;
   std::vector<double> values_, weights_;
 };
 
@@ -432,6 +488,7 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
                    const FitOptions& options) {
   check_data_for_fit(kind, data, options);
   int evaluations = 0;
+  int simulations = 0;
   bool converged = true;
   std::string message;
   double cost = 0.0;
@@ -449,18 +506,22 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
     // No restart here: the polish on the whole record that follows plays its part.
     const Model coarse_fit = coarse.refine(grid_start, cost, converged, message, 1.0, 0);
     evaluations += coarse.evaluations();
+    simulations += coarse.simulations();
     Problem lin(linear, data, options);
     linear_fit = lin.refine(coarse_fit, cost, converged, message, 0.1, 0);
     evaluations += lin.evaluations();
+    simulations += lin.simulations();
   } else {
     Problem lin(linear, data, options);
     const Model grid_start = lin.delay_grid();
     linear_fit = lin.refine(grid_start, cost, converged, message);
     evaluations += lin.evaluations();
+    simulations += lin.simulations();
   }
   if (linear == kind) {
     FitResult r = finish(linear_fit, data, options.simulation);
     r.evaluations = evaluations;
+    r.simulations = simulations;
     r.converged = converged;
     r.message = message;
     return r;
@@ -484,8 +545,10 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
   start = nl.coarse_starts(start);
   Model best = nl.refine(start, cost, converged, message);
   evaluations += nl.evaluations();
+  simulations += nl.simulations();
   FitResult r = finish(best, data, options.simulation);
   r.evaluations = evaluations;
+  r.simulations = simulations;
   r.converged = converged;
   r.message = message;
   return r;
@@ -646,6 +709,7 @@ FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*
   const Model best = problem.refine(s, cost, converged, message, step_scale, restarts);
   FitResult r = finish(best, ptrs, options.simulation);
   r.evaluations = problem.evaluations();
+  r.simulations = problem.simulations();
   r.converged = converged;
   r.message = message;
   return r;

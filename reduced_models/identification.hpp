@@ -90,7 +90,8 @@ struct FitResult {
   std::vector<double> nrmse;                 // per recording (eq. 19), %
   std::vector<std::vector<double>> response; // model output per recording, absolute mm
   double iae_total = 0.0;                    // Σ iae (IAE_c, eq. 21)
-  int evaluations = 0;                       // model simulations spent
+  int evaluations = 0;                       // cost evaluations spent
+  int simulations = 0;                       // GL simulations spent (all recordings)
   bool converged = true;                     // false: an optimiser stopped on a limit/failure
   std::string message;                       // optimiser status, for reports
 };

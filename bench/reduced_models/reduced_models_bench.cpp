@@ -27,15 +27,17 @@ void BM_LfomFitWithDelaySearch(benchmark::State& state) {
   const auto data = lfom_data(static_cast<std::size_t>(state.range(0)));
   FitOptions options;
   options.threads = 1;
-  int evaluations = 0;
+  int evaluations = 0, simulations = 0;
   double nrmse = 0.0;
   for (auto _ : state) {
     const auto r = fit(ModelKind::lfom, data, options);
     evaluations = r.evaluations;
+    simulations = r.simulations;
     nrmse = r.nrmse.front();
     benchmark::DoNotOptimize(r.model.p.K);
   }
   state.counters["evaluations"] = evaluations;
+  state.counters["simulations"] = simulations;
   state.counters["nrmse"] = nrmse;
 }
 BENCHMARK(BM_LfomFitWithDelaySearch)->Arg(2044)->Arg(20000)->Unit(benchmark::kMillisecond)
