@@ -55,6 +55,26 @@ TEST(FractionalDelay, InterpolatesLinearlyBetweenSamples) {
   EXPECT_DOUBLE_EQ(out[4], 2.75);
 }
 
+TEST(FractionalDelay, CommutesWithTheGlRecursionForLinearModels) {
+  // The fitter relies on this to re-delay a cached unit response instead of re-simulating.
+  const auto d = step_data(1500, 0.13, 2.0, 30);
+  Model m{ModelKind::lfom, {}, {}};
+  m.p.K = 1.3;
+  m.p.T = 1.1;
+  m.p.lambda = 0.55;
+  m.p.L = 3.37;
+  const auto delayed_input_response = simulate(m, d).y_dwe_mm;
+  Model undelayed = m;
+  undelayed.p.L = 0.0;
+  auto y0 = simulate(undelayed, d).y_dwe_mm;
+  for (double& v : y0) v -= d.y0_mm;
+  std::vector<double> delayed_output;
+  fractional_delay(y0, m.p.L / d.h, delayed_output);
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    ASSERT_NEAR(delayed_input_response[k] - d.y0_mm, delayed_output[k], 1e-12) << k;
+  }
+}
+
 TEST(Sopd, IsTwoCascadedFirstOrderLagsWithUnitStaticGainTimesK) {
   const auto d = step_data(3000, 0.13, 1.0);
   Model sopd{ModelKind::sopd, {}, {}};
