@@ -63,6 +63,23 @@ TEST(VolumeBalance, ClosesToRoundOffWithInflowOutflowAndLateralFlow) {
   EXPECT_DOUBLE_EQ(t.error(), b.error());
 }
 
+TEST(VolumeBalance, InflowIntoADrySlopingTrapezoidalChannelWetsItAndBalanceCloses) {
+  ReachSpec spec = reach(20.0, 80, {0.5, 1.0}, 0.0);
+  spec.manning_n = 0.02;
+  for (int i = 0; i < 80; ++i) spec.bed_elevation.push_back(0.01 * (80 - i) * 0.25);
+  Canal canal;
+  ASSERT_TRUE(canal.add_reach(spec));
+  canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.05));
+  canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>());
+  const int front = canal.add_probe({0, 10.0, Quantity::depth, 1.0});
+  ASSERT_TRUE(canal.advance_to(30.0));
+  for (double a : canal.reach(0).area()) EXPECT_GE(a, 0.0);
+  EXPECT_GT(canal.probe_samples(front).value.back(), 0.0);  // the front passed mid-reach
+  const VolumeBalance b = canal.balance(0);
+  EXPECT_NEAR(b.inflow, 0.05 * 30.0, 1e-12);
+  EXPECT_LT(b.relative_error(), 1e-12) << b.error();
+}
+
 TEST(VolumeBalance, ResetStartsFromTheCurrentStorage) {
   Canal canal;
   ASSERT_TRUE(canal.add_reach(reach(10.0, 20, {1.0, 0.0}, 0.5)));
