@@ -51,7 +51,7 @@ class Reach {
   Section section_;
   double manning_n_;
   std::vector<double> area_, discharge_, bed_, lateral_inflow_;
-  // Scheme work arrays (see scheme in canal.cpp): start-of-step state, primitive variables and
+  // Scheme work arrays (solver/scheme.cpp): start-of-step state, primitive variables, 1/A and
   // their limited slopes per cell, fluxes per face (cells + 1 faces; face f is left of cell f).
   std::vector<double> area0_, discharge0_;
   std::vector<double> h_, u_, eta_, dh_, du_, deta_, inv_area_;
