@@ -12,5 +12,7 @@ void add_prbs_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
 void add_scenarios_command(CLI::App& app);
 void add_simulate_command(CLI::App& app);
+void add_diagnose_command(CLI::App& app);
+void add_blindtest_command(CLI::App& app);
 
 }  // namespace canalsim::cli

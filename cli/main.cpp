@@ -21,6 +21,10 @@ int main(int argc, char** argv) {
 #endif
   canalsim::cli::add_scenarios_command(app);
   canalsim::cli::add_simulate_command(app);
+#ifdef CANALSIM_HAVE_DIAGNOSE
+  canalsim::cli::add_diagnose_command(app);
+  canalsim::cli::add_blindtest_command(app);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,287 @@
+#include "diagnosis/blindtest.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <mutex>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "scenarios/simulate.hpp"
+
+namespace canalsim::diagnosis {
+namespace {
+
+double uniform(std::mt19937_64& rng, double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
+bool coin(std::mt19937_64& rng) { return std::bernoulli_distribution(0.5)(rng); }
+
+const char* short_name(const std::string& name) {
+  static const std::pair<const char*, const char*> names[] = {
+      {"none", "none"}, {"gate_rate_limit", "rate"}, {"sensor_quantization", "quant"}, {"sensor_delay", "delay"},
+      {"sensor_offset", "offset"}, {"gate_leakage", "leak"}, {"discharge_coefficient", "Cd"}, {"friction", "fric"},
+      {"lateral_outflow", "lateral"}, {"downstream_gate", "dgate"}, {"unexplained", "unexpl"}};
+  for (const auto& [a, b] : names) {
+    if (name == a) return b;
+  }
+  return "other";
+}
+
+std::vector<std::string> effect_names(const BlindtestOptions& o) {
+  if (!o.effects.empty()) return o.effects;
+  std::vector<std::string> out;
+  for (const auto& e : catalog()) out.push_back(e.name);
+  return out;
+}
+
+}  // namespace
+
+std::string BlindtestOptions::validate() const {
+  std::ostringstream out;
+  if (trials < 1) out << "trials = " << trials << ": expected >= 1";
+  else if (threads < 1) out << "threads = " << threads << ": expected >= 1";
+  else if (experiments.empty()) out << "experiments: expected at least one";
+  else if (!(duration_s == 0.0 || duration_s >= 20.0)) out << "duration_s = " << duration_s << ": expected 0 or >= 20";
+  else if (!(noise_std_mm >= 0.0)) out << "noise_std_mm = " << noise_std_mm << ": expected >= 0";
+  else {
+    for (const auto& e : effects) {
+      if (!effect_from_name(e)) {
+        out << "effects: unknown effect '" << e << "'";
+        break;
+      }
+    }
+    if (out.str().empty()) {
+      if (const std::string d = diagnose.validate(); !d.empty()) out << "diagnose." << d;
+    }
+  }
+  return out.str();
+}
+
+ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng) {
+  ConcealedEffect t{effect, 0.0};
+  if (effect == "gate_rate_limit") t.value = uniform(rng, 2.0, 20.0);
+  else if (effect == "sensor_quantization") t.value = uniform(rng, 0.2, 1.0);
+  else if (effect == "sensor_delay") t.value = uniform(rng, 0.3, 2.0);
+  else if (effect == "sensor_offset") t.value = (coin(rng) ? 1.0 : -1.0) * uniform(rng, 0.5, 3.0);
+  else if (effect == "gate_leakage") t.value = uniform(rng, 0.5, 3.0);
+  else if (effect == "discharge_coefficient") t.value = coin(rng) ? uniform(rng, 0.8, 0.92) : uniform(rng, 1.08, 1.2);
+  else if (effect == "friction") t.value = coin(rng) ? 0.5 : uniform(rng, 2.0, 4.0);
+  else if (effect == "lateral_outflow") t.value = uniform(rng, 0.03, 0.15);
+  else if (effect == "downstream_gate") t.value = (coin(rng) ? 1.0 : -1.0) * uniform(rng, 0.5, 2.0);
+  return t;
+}
+
+void conceal(const ConcealedEffect& truth, scenarios::Scenario& s, scenarios::ExperimentSpec& e, double inflow_m3s) {
+  if (truth.effect == "none") return;
+  const Effect effect = *effect_from_name(truth.effect);
+  if (!info(effect).sensor_only) {
+    apply_effect(effect, truth.value, s, inflow_m3s);
+    return;
+  }
+  scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+  if (effect == Effect::sensor_quantization) sensors.resolution_mm = truth.value;
+  if (effect == Effect::sensor_delay) sensors.delay_s += truth.value;
+  if (effect == Effect::sensor_offset) sensors.offset_mm += truth.value;
+  e.sensors = sensors;
+}
+
+double parameter_error(const ConcealedEffect& truth, double estimate) {
+  if (truth.effect == "none") return std::numeric_limits<double>::quiet_NaN();
+  const double reference = truth.effect == "discharge_coefficient" ? truth.value - 1.0 : truth.value;
+  return std::abs(estimate - truth.value) / std::max(std::abs(reference), 1e-12);
+}
+
+BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
+  if (const std::string problem = o.validate(); !problem.empty()) throw InputError("blindtest options: " + problem);
+  const auto started = std::chrono::steady_clock::now();
+  std::vector<scenarios::ExperimentSpec> experiments;
+  for (const auto& name : o.experiments) {
+    const auto* e = base.find_experiment(name);
+    if (!e) throw InputError(base.source + ": no experiment '" + name + "' for the blind test");
+    scenarios::ExperimentSpec copy = *e;
+    if (o.duration_s > 0.0) copy.duration_s = o.duration_s;
+    experiments.push_back(copy);
+  }
+  // Inflow at each operating point (the reference of lateral_outflow): from the nominal steady state.
+  std::vector<double> inflow(experiments.size(), 0.0);
+  for (std::size_t i = 0; i < experiments.size(); ++i) {
+    scenarios::ExperimentSpec steady = experiments[i];
+    steady.input.kind = scenarios::InputKind::constant;
+    steady.duration_s = 2.0;
+    const Recording r = scenarios::simulate(base, steady);
+    inflow[i] = r.column(columns::discharge).front() * 1e-3;
+  }
+  // Balanced classes: shuffled blocks of every effect (and none).
+  std::vector<std::string> classes;
+  if (o.include_none) classes.push_back("none");
+  for (const auto& e : effect_names(o)) classes.push_back(e);
+  std::mt19937_64 rng(o.seed);
+  std::vector<ConcealedEffect> truths;
+  while (truths.size() < static_cast<std::size_t>(o.trials)) {
+    std::vector<std::string> block = classes;
+    std::shuffle(block.begin(), block.end(), rng);
+    for (const auto& c : block) {
+      if (truths.size() < static_cast<std::size_t>(o.trials)) truths.push_back(draw_effect(c, rng));
+    }
+  }
+  BlindtestResult result;
+  result.trials.resize(truths.size());
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> done{0};
+  std::mutex progress_mutex;
+  DiagnoseOptions diagnose_options = o.diagnose;
+  diagnose_options.threads = 1;
+  diagnose_options.progress = nullptr;
+  auto worker = [&] {
+    for (std::size_t i = next++; i < truths.size(); i = next++) {
+      Trial& trial = result.trials[i];
+      trial.index = static_cast<int>(i);
+      trial.truth = truths[i];
+      const auto t0 = std::chrono::steady_clock::now();
+      try {
+        std::vector<Recording> recordings;
+        for (std::size_t k = 0; k < experiments.size(); ++k) {
+          scenarios::Scenario s = base;
+          scenarios::ExperimentSpec e = experiments[k];
+          scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+          sensors.noise_std_mm = o.noise_std_mm;
+          sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
+          e.sensors = sensors;
+          conceal(trial.truth, s, e, inflow[k]);
+          Recording r = scenarios::simulate(s, e);
+          r.source = "trial" + std::to_string(i) + "/" + e.name;
+          recordings.push_back(std::move(r));
+        }
+        const Diagnosis d = diagnose(base, recordings, diagnose_options);
+        if (!d.ok) throw std::runtime_error(d.message);
+        trial.verdict = d.verdict;
+        trial.correct = trial.verdict == trial.truth.effect;
+        trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
+        for (const auto& e : d.effects) {
+          if (e.name == trial.truth.effect) {
+            trial.estimate = e.parameter.value;
+            trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
+          }
+          if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
+        }
+      } catch (const std::exception& ex) {
+        trial.verdict = "failed";
+        trial.message = ex.what();
+      }
+      trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const int finished = ++done;
+      if (o.progress) {
+        const std::lock_guard lock(progress_mutex);
+        o.progress(finished, o.trials);
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 0; w < std::min(o.threads, o.trials); ++w) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  // Summary.
+  result.classes = classes;
+  result.classes.push_back("unexplained");
+  const auto index_of = [&](const std::string& name) {
+    const auto it = std::find(result.classes.begin(), result.classes.end(), name);
+    return it == result.classes.end() ? result.classes.size() - 1 : static_cast<std::size_t>(it - result.classes.begin());
+  };
+  result.confusion.assign(classes.size(), std::vector<int>(result.classes.size(), 0));
+  std::vector<double> errors, gains;
+  double total_seconds = 0.0;
+  for (const auto& t : result.trials) {
+    total_seconds += t.seconds;
+    result.confusion[index_of(t.truth.effect)][index_of(t.verdict)]++;
+    result.correct += t.correct;
+    if (t.truth.effect == "none") {
+      ++result.clean_trials;
+      result.false_alarms += t.verdict != "none";
+      continue;
+    }
+    ++result.effect_trials;
+    if (!t.correct) continue;
+    ++result.effect_correct;
+    errors.push_back(t.parameter_error);
+    gains.push_back(t.heldout_gain);
+    result.within_25 += t.parameter_error <= 0.25;
+    result.gain_positive += t.heldout_gain > 0.0;
+  }
+  result.accuracy = static_cast<double>(result.correct) / static_cast<double>(std::max<std::size_t>(result.trials.size(), 1));
+  result.false_alarm_rate = result.clean_trials ? static_cast<double>(result.false_alarms) / result.clean_trials : 0.0;
+  if (!errors.empty()) {
+    std::sort(errors.begin(), errors.end());
+    result.median_parameter_error = errors[errors.size() / 2];
+    result.max_parameter_error = errors.back();
+    result.mean_heldout_gain = std::accumulate(gains.begin(), gains.end(), 0.0) / static_cast<double>(gains.size());
+    result.min_heldout_gain = *std::min_element(gains.begin(), gains.end());
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  result.mean_trial_seconds = total_seconds / static_cast<double>(std::max<std::size_t>(result.trials.size(), 1));
+  return result;
+}
+
+std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o) {
+  std::ostringstream s;
+  char buf[512];
+  s << "Diagnosis blind test: " << r.trials.size() << " trials, seed " << o.seed << ", experiments";
+  for (const auto& e : o.experiments) s << ' ' << e;
+  s << (o.duration_s > 0.0 ? " (" + std::to_string(o.duration_s) + " s)" : "") << ", level noise " << o.noise_std_mm
+    << " mm\n\nconfusion matrix (rows: concealed effect, columns: verdict)\n";
+  std::snprintf(buf, sizeof buf, "%-8s", "");
+  s << buf;
+  for (const auto& c : r.classes) {
+    std::snprintf(buf, sizeof buf, "%8s", short_name(c));
+    s << buf;
+  }
+  s << '\n';
+  for (std::size_t i = 0; i < r.confusion.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%-8s", short_name(r.classes[i]));
+    s << buf;
+    for (int v : r.confusion[i]) {
+      std::snprintf(buf, sizeof buf, "%8s", v ? std::to_string(v).c_str() : ".");
+      s << buf;
+    }
+    s << '\n';
+  }
+  s << "\n(rate = gate_rate_limit, quant = sensor_quantization, delay = sensor_delay, offset = sensor_offset,\n"
+       " leak = gate_leakage, Cd = discharge_coefficient, fric = friction, lateral = lateral_outflow,\n"
+       " dgate = downstream_gate, unexpl = unexplained)\n\n";
+  std::snprintf(buf, sizeof buf,
+                "top-1 accuracy          %d/%zu = %.1f%% (effect trials %d/%d)\n"
+                "false alarms (clean)    %d/%d = %.1f%%\n"
+                "parameter error         median %.1f%%, max %.1f%%, within 25%%: %d/%d correct attributions\n"
+                "held-out Nrmse gain     mean %+.2f points, min %+.2f, improved in %d/%d correct attributions\n"
+                "time                    %.1f s total, %.1f s per trial (one diagnosis of %zu recordings + their simulation)\n",
+                r.correct, r.trials.size(), 100.0 * r.accuracy, r.effect_correct, r.effect_trials, r.false_alarms,
+                r.clean_trials, 100.0 * r.false_alarm_rate, 100.0 * r.median_parameter_error,
+                100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.mean_heldout_gain, r.min_heldout_gain,
+                r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
+  s << buf;
+  return s.str();
+}
+
+
+nlohmann::json to_json(const BlindtestResult& r) {
+  using nlohmann::json;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json trials = json::array();
+  for (const auto& t : r.trials) {
+    trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
+                      {"verdict", t.verdict}, {"correct", t.correct}, {"estimate", num(t.estimate)},
+                      {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
+                      {"seconds", t.seconds}, {"message", t.message}});
+  }
+  return json{{"classes", r.classes}, {"confusion", r.confusion}, {"accuracy", r.accuracy},
+              {"effect_trials", r.effect_trials}, {"effect_correct", r.effect_correct},
+              {"clean_trials", r.clean_trials}, {"false_alarms", r.false_alarms},
+              {"false_alarm_rate", r.false_alarm_rate}, {"within_25", r.within_25},
+              {"median_parameter_error", r.median_parameter_error}, {"max_parameter_error", r.max_parameter_error},
+              {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain},
+              {"min_heldout_gain", r.min_heldout_gain}, {"seconds", r.seconds}, {"trials", trials}};
+}
+
+}  // namespace canalsim::diagnosis

@@ -1,0 +1,91 @@
+// The blind benchmark of issue 5: per trial, one concealed effect (or none) with a random
+// magnitude is injected into the scenario, the chosen experiments are simulated with it (sensor
+// noise and quantisation as in the laboratory), the diagnosis runs without being told, and the
+// verdict and estimated parameter are compared with the truth.
+//
+// Magnitudes (issue 5): gate_rate_limit 2–20 mm/s; sensor_quantization 0.2–1 mm; sensor_delay
+// 0.3–2 s; sensor_offset ±0.5–3 mm; gate_leakage 0.5–3 mm; discharge_coefficient ×0.8–0.92 or
+// ×1.08–1.2; friction ×0.5 or ×2–4; lateral_outflow 3–15% of the inflow; downstream_gate
+// ±0.5–2 mm. Classes are drawn in shuffled blocks of all ten, so every class appears about
+// equally often.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "diagnosis/diagnose.hpp"
+#include "scenarios/scenario.hpp"
+
+namespace canalsim::diagnosis {
+
+struct BlindtestOptions {
+  int trials = 40;                  // >= 1
+  std::uint64_t seed = 1;
+  int threads = 2;                  // trials in parallel; >= 1
+  std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
+  double duration_s = 0.0;          // 0 = each experiment's own duration; else >= 20 s
+  double noise_std_mm = 0.05;       // level-sensor noise of the concealed recordings; >= 0
+  // Effects to draw from (empty = the whole catalog); `none` trials are added when include_none.
+  std::vector<std::string> effects;
+  bool include_none = true;
+  DiagnoseOptions diagnose;         // its threads are set to 1: trials are the parallel unit
+  std::function<void(int done, int total)> progress;
+  [[nodiscard]] std::string validate() const;
+};
+
+struct ConcealedEffect {
+  std::string effect = "none";
+  double value = 0.0;               // in the catalog parameter's unit
+};
+
+struct Trial {
+  int index = 0;
+  ConcealedEffect truth;
+  std::string verdict;
+  double estimate = 0.0;            // the diagnosis' parameter for the true effect's name
+  double parameter_error = 0.0;     // relative (see docs/diagnosis.md); NaN without an effect
+  double heldout_gain = 0.0;        // held-out Nrmse after − before of the verdict [points]
+  bool correct = false;
+  double seconds = 0.0;
+  std::string message;              // failure, if any
+};
+
+struct BlindtestResult {
+  std::vector<Trial> trials;
+  std::vector<std::string> classes;           // row/column labels: none, effects..., and unexplained (column only)
+  std::vector<std::vector<int>> confusion;    // [true class][verdict class]
+  int correct = 0, effect_trials = 0, effect_correct = 0;
+  int clean_trials = 0, false_alarms = 0;
+  double accuracy = 0.0, false_alarm_rate = 0.0;
+  int within_25 = 0;                          // correct attributions with parameter error <= 25%
+  double median_parameter_error = 0.0, max_parameter_error = 0.0;
+  int gain_positive = 0;                      // correct attributions whose held-out Nrmse improved
+  double mean_heldout_gain = 0.0, min_heldout_gain = 0.0;
+  double seconds = 0.0, mean_trial_seconds = 0.0;
+};
+
+// A random magnitude for `effect` in the issue's range.
+ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng);
+
+// The scenario with the effect injected; `inflow_m3s` is the reference of lateral_outflow.
+// Sensor effects go into the scenario's (and the experiment's) sensor settings, so the
+// simulator's own sensors make them.
+void conceal(const ConcealedEffect& truth, scenarios::Scenario& scenario, scenarios::ExperimentSpec& experiment,
+             double inflow_m3s);
+
+// Relative error of an estimate: |est − true| / |true − no effect| for the discharge coefficient
+// (its departure from 1), |est − true| / |true| otherwise.
+double parameter_error(const ConcealedEffect& truth, double estimate);
+
+// Runs the benchmark. Throws InputError on invalid options or unknown experiments.
+BlindtestResult run_blindtest(const scenarios::Scenario& scenario, const BlindtestOptions& options);
+
+std::string format_blindtest(const BlindtestResult& result, const BlindtestOptions& options);
+nlohmann::json to_json(const BlindtestResult& result);
+
+}  // namespace canalsim::diagnosis

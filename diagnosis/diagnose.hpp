@@ -1,0 +1,120 @@
+// Diagnosis of a scenario model against recordings: compare, locate, explain, refit.
+//
+//   1. Nominal: each recording is replayed through the scenario (its gate command u_mm drives the
+//      controlled gate) with ideal sensors; the scenario's own sensor model (resolution, delay,
+//      offset) is applied to the sampled true levels. Residuals = recording − model per channel.
+//   2. Locate (locate.hpp) and test the residuals (residual_tests.hpp).
+//   3. Explain: every catalog effect (catalog.hpp) is fitted, one parameter each, on the first
+//      `fit_fraction` of every recording and judged on the rest. Cost = Σ_channels w_c·MSE_c with
+//      w_c = 1/s_c², s_c the within-recording spread of the channel (floored), so that levels,
+//      gate position and flow all count. Score = relative reduction of the held-out cost.
+//      An effect is *significant* when its score ≥ min_score, its BIC on the fitted part improves
+//      by at least min_bic_gain (with the number of samples corrected for residual correlation),
+//      and its parameter is material (catalog.hpp).
+//   4. Verdict: the best significant effect; else `none` when the nominal residual is within the
+//      measurement noise; else `unexplained`.
+//   5. Refit: the winner's parameter with a standard deviation (curvature of the cost, inflated
+//      by residual correlation), Nrmse before/after on fitted and held-out parts, residual tests
+//      after.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "diagnosis/catalog.hpp"
+#include "diagnosis/locate.hpp"
+#include "diagnosis/residual_tests.hpp"
+#include "scenarios/recording.hpp"
+#include "scenarios/scenario.hpp"
+
+namespace canalsim::diagnosis {
+
+struct DiagnoseOptions {
+  double fit_fraction = 0.5;     // leading share of each recording used for fitting; (0.1, 0.9)
+  // Channels compared (those a recording lacks are skipped); the primary must be present.
+  std::vector<std::string> channels = {"y_dwe_mm", "y_dw_mm", "y_up_mm", "x_up_mm", "q_lps"};
+  std::string primary = "y_dwe_mm";  // Nrmse (eq. 19) and location are reported on this channel
+  std::vector<std::string> candidates;  // effect names; empty = the whole catalog
+  double min_score = 0.15;       // held-out cost reduction for significance; (0, 1)
+  double min_bic_gain = 10.0;    // BIC improvement on the fitted part; >= 0
+  double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise; > 0
+  int max_evaluations = 6;       // simulations per re-simulated candidate (secant steps); 2..50
+  int threads = 2;               // recordings simulated in parallel; >= 1
+  // Replay the recorded y_up_mm as the upstream level. Off by default: a level-sensor fault
+  // (offset, delay) would then enter the hydraulics and blur its own signature.
+  bool use_recorded_upstream = false;
+  // The recorded command changed somewhere in the sample interval before it shows; the replay
+  // switches half a sample earlier so that, on average, it is not late (0 = at the sample).
+  double command_lead_samples = 0.5;  // [0, 1]
+  double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
+  // Leading seconds of every recording left out of costs, tests and location: what happened
+  // before the recording started is unknown (the replay settles at the recording's
+  // operating_opening_mm metadata, or at its first command), so its first transient may differ.
+  double warmup_s = 10.0;        // [0, a third of the shortest recording]
+  ResidualTestOptions tests;
+  LocateOptions locate;
+  // Called with (fraction done, what is running).
+  std::function<void(double, const std::string&)> progress;
+  [[nodiscard]] std::string validate() const;
+};
+
+struct ParameterEstimate {
+  std::string name;
+  std::string unit;
+  double value = 0.0;
+  double std = 0.0;   // one standard deviation; 0 when the cost was flat or at a bound
+};
+
+struct EffectResult {
+  std::string name;
+  double score = 0.0;            // relative held-out cost reduction (1 = perfect, < 0 = worse)
+  bool significant = false;
+  bool material = false;
+  ParameterEstimate parameter;
+  double nrmse_before = 0.0, nrmse_after = 0.0;                  // primary, fitted part, mean over recordings
+  double heldout_nrmse_before = 0.0, heldout_nrmse_after = 0.0;  // primary, held-out part
+  double cost_before = 0.0, cost_after = 0.0;                    // weighted, fitted part
+  double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
+  double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
+  int simulations = 0;           // re-simulations spent on the fit
+  std::string note;              // why it was skipped, if it was
+};
+
+// Per-recording series for plots (primary channel, mm).
+struct RecordingSeries {
+  std::string name;
+  std::vector<double> t, u, recorded, nominal, corrected;
+  std::size_t fit_samples = 0;
+};
+
+struct Diagnosis {
+  bool ok = true;
+  std::string message;           // numerical failure (a simulation that did not run), when !ok
+  std::string verdict;           // none | unexplained | an effect name
+  std::string reason;            // one sentence on how the verdict was reached
+  std::vector<EffectResult> effects;   // ranked, best first
+  Mismatch mismatch;             // of the nominal model
+  Mismatch mismatch_after;       // with the winner (equals mismatch when there is none)
+  std::vector<ResidualTests> tests_before, tests_after;  // per recording, primary channel
+  double noise = 0.0;            // estimated measurement noise of the primary channel [mm]
+  double noise_limit_nrmse = 0.0;  // Nrmse a perfect model would reach given that noise
+  double nominal_rms = 0.0;      // primary residual RMS of the nominal model [mm]
+  std::vector<RecordingSeries> series;
+  std::map<std::string, double> channel_scale;  // s_c of the cost weights
+  double seconds = 0.0;
+};
+
+// Problems that make recordings unusable with the scenario, one line each naming the recording:
+// sampling period different from the scenario's sensors, missing channels, gate commands or
+// positions outside the controlled gate's range, too few samples. Empty when all are usable.
+std::vector<std::string> check_recordings(const scenarios::Scenario& scenario,
+                                          const std::vector<Recording>& recordings);
+
+// Runs the diagnosis. Throws InputError (all problems of check_recordings, or invalid options);
+// a simulation failure is returned as ok = false with the message.
+Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
+                   const DiagnoseOptions& options = {});
+
+}  // namespace canalsim::diagnosis

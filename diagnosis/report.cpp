@@ -1,0 +1,291 @@
+#include "diagnosis/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace canalsim::diagnosis {
+namespace {
+
+using nlohmann::json;
+
+// JSON has no NaN/inf: such values become null.
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json correlation_json(const CorrelationTest& t) {
+  return json{{"bound", t.bound}, {"outside", t.outside}, {"allowed", t.allowed}, {"pass", t.pass},
+              {"lags", t.lags}, {"values", t.values}};
+}
+
+json mismatch_json(const Mismatch& m) {
+  json windows = json::array();
+  for (const auto& w : m.windows) {
+    windows.push_back({{"recording", w.recording}, {"start_s", w.start_s}, {"end_s", w.end_s},
+                       {"rms_mm", w.rms}, {"peak_mm", w.peak}, {"events", w.events}});
+  }
+  json by_recording = json::array();
+  for (const auto& r : m.by_recording) {
+    json channels = json::object();
+    for (const auto& c : r.channels) channels[c.name] = {{"rms", c.rms}, {"mean", c.mean}};
+    by_recording.push_back({{"recording", r.name}, {"operating_point_mm", r.operating_point_mm},
+                            {"nrmse_percent", number(r.nrmse_percent)}, {"rms_mm", r.rms}, {"mean_mm", r.mean},
+                            {"free_fraction", r.free_fraction < 0.0 ? json(nullptr) : json(r.free_fraction)},
+                            {"white", r.white}, {"uncorrelated_with_input", r.uncorrelated}, {"channels", channels}});
+  }
+  auto groups = [](const std::vector<GroupStat>& g) {
+    json out = json::object();
+    for (const auto& x : g) out[x.name] = {{"samples", x.samples}, {"rms_mm", x.rms}, {"mean_mm", x.mean}};
+    return out;
+  };
+  json by_channel = json::object();
+  for (const auto& c : m.by_channel) by_channel[c.name] = {{"rms", c.rms}, {"mean", c.mean}};
+  json band = m.band.found ? json::array({m.band.low_hz, m.band.high_hz}) : json(nullptr);
+  return json{{"windows", windows}, {"band_hz", band}, {"by_recording", by_recording},
+              {"by_regime", groups(m.by_regime)}, {"by_event", groups(m.by_event)},
+              {"by_level", groups(m.by_level)}, {"by_channel", by_channel}};
+}
+
+std::string esc(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string fixed(double v, int digits = 3) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+struct Line {
+  const std::vector<double>* y;
+  std::string colour, label;
+};
+
+// An SVG line plot of several series over t, decimated to at most ~1500 points each, with
+// shaded [start, end] spans.
+std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& lines,
+                     const std::vector<std::pair<double, double>>& spans, const std::string& y_label,
+                     double split_t) {
+  const double width = 900, height = 220, left = 55, right = 10, top = 10, bottom = 30;
+  double lo = 1e300, hi = -1e300;
+  for (const auto& l : lines) {
+    for (double v : *l.y) { lo = std::min(lo, v); hi = std::max(hi, v); }
+  }
+  if (!(hi > lo)) { lo -= 1.0; hi += 1.0; }
+  const double pad = 0.05 * (hi - lo);
+  lo -= pad;
+  hi += pad;
+  const double t0 = t.front(), t1 = std::max(t.back(), t0 + 1e-9);
+  auto X = [&](double x) { return left + (x - t0) / (t1 - t0) * (width - left - right); };
+  auto Y = [&](double y) { return top + (hi - y) / (hi - lo) * (height - top - bottom); };
+  std::ostringstream s;
+  s << "<svg viewBox='0 0 " << width << ' ' << height << "' width='100%' xmlns='http://www.w3.org/2000/svg'>";
+  for (const auto& [a, b] : spans) {
+    s << "<rect x='" << fixed(X(a), 1) << "' y='" << top << "' width='" << fixed(std::max(1.0, X(b) - X(a)), 1)
+      << "' height='" << height - top - bottom << "' fill='#fde2c8'/>";
+  }
+  if (split_t > t0 && split_t < t1) {
+    s << "<line x1='" << fixed(X(split_t), 1) << "' x2='" << fixed(X(split_t), 1) << "' y1='" << top << "' y2='"
+      << height - bottom << "' stroke='#999' stroke-dasharray='4 3'/><text x='" << fixed(X(split_t) + 4, 1)
+      << "' y='" << top + 12 << "' font-size='11' fill='#666'>held-out &#8594;</text>";
+  }
+  s << "<rect x='" << left << "' y='" << top << "' width='" << width - left - right << "' height='"
+    << height - top - bottom << "' fill='none' stroke='#444'/>";
+  for (int k = 0; k <= 4; ++k) {
+    const double v = lo + (hi - lo) * k / 4.0;
+    s << "<text x='" << left - 4 << "' y='" << fixed(Y(v) + 4, 1) << "' font-size='10' text-anchor='end'>"
+      << fixed(v, 2) << "</text>";
+    const double tv = t0 + (t1 - t0) * k / 4.0;
+    s << "<text x='" << fixed(X(tv), 1) << "' y='" << height - 12 << "' font-size='10' text-anchor='middle'>"
+      << fixed(tv, 0) << "</text>";
+  }
+  s << "<text x='12' y='" << top + 100 << "' font-size='11' transform='rotate(-90 12 " << top + 100 << ")'>"
+    << esc(y_label) << "</text><text x='" << width / 2 << "' y='" << height - 1
+    << "' font-size='11' text-anchor='middle'>t [s]</text>";
+  const std::size_t stride = std::max<std::size_t>(1, t.size() / 1500);
+  double legend_x = left + 8;
+  for (const auto& l : lines) {
+    s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
+    for (std::size_t k = 0; k < t.size(); k += stride) s << fixed(X(t[k]), 1) << ',' << fixed(Y((*l.y)[k]), 1) << ' ';
+    s << "'/><text x='" << fixed(legend_x, 1) << "' y='" << height - bottom - 6 << "' font-size='11' fill='"
+      << l.colour << "'>" << esc(l.label) << "</text>";
+    legend_x += 9.0 * static_cast<double>(l.label.size()) + 20.0;
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace
+
+json to_json(const Diagnosis& d) {
+  json effects = json::array();
+  for (const auto& e : d.effects) {
+    json parameters = json::object();
+    parameters[e.parameter.name] = {{"value", number(e.parameter.value)}, {"std", number(e.parameter.std)},
+                                    {"unit", e.parameter.unit}};
+    effects.push_back({{"name", e.name}, {"score", number(e.score)}, {"significant", e.significant},
+                       {"material", e.material}, {"parameters", parameters},
+                       {"nrmse_before", number(e.nrmse_before)}, {"nrmse_after", number(e.nrmse_after)},
+                       {"heldout_nrmse_before", number(e.heldout_nrmse_before)},
+                       {"heldout_nrmse_after", number(e.heldout_nrmse_after)},
+                       {"cost_before", number(e.cost_before)}, {"cost_after", number(e.cost_after)},
+                       {"heldout_cost_before", number(e.heldout_cost_before)},
+                       {"heldout_cost_after", number(e.heldout_cost_after)}, {"delta_bic", number(e.delta_bic)},
+                       {"simulations", e.simulations}, {"note", e.note}});
+  }
+  json tests = json::array();
+  for (std::size_t i = 0; i < d.tests_before.size(); ++i) {
+    json t{{"recording", i < d.series.size() ? d.series[i].name : std::to_string(i)},
+           {"before", {{"autocorrelation", correlation_json(d.tests_before[i].autocorrelation)},
+                       {"cross_correlation", correlation_json(d.tests_before[i].cross_correlation)}}}};
+    if (i < d.tests_after.size()) {
+      t["after"] = {{"autocorrelation", correlation_json(d.tests_after[i].autocorrelation)},
+                    {"cross_correlation", correlation_json(d.tests_after[i].cross_correlation)}};
+    }
+    tests.push_back(t);
+  }
+  json scales = json::object();
+  for (const auto& [c, s] : d.channel_scale) scales[c] = s;
+  json out{{"ok", d.ok}, {"verdict", d.verdict}, {"reason", d.reason}, {"effects", effects},
+           {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
+           {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
+           {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
+  if (!d.ok) out["message"] = d.message;
+  return out;
+}
+
+std::string text_summary(const Diagnosis& d) {
+  std::ostringstream s;
+  if (!d.ok) {
+    s << "diagnosis failed: " << d.message << '\n';
+    return s.str();
+  }
+  s << "verdict: " << d.verdict << "  (" << d.reason << ")\n";
+  s << "noise " << fixed(d.noise, 3) << " mm, nominal residual RMS " << fixed(d.nominal_rms, 3)
+    << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "%-22s %7s %4s %22s %9s %9s %9s %9s %8s\n", "effect", "score", "sig", "parameter",
+                "Nrmse fit", "after", "held-out", "after", "dBIC");
+  s << line;
+  for (const auto& e : d.effects) {
+    const std::string p = fixed(e.parameter.value, 3) + " +- " + fixed(e.parameter.std, 3) + " " + e.parameter.unit;
+    std::snprintf(line, sizeof line, "%-22s %7.3f %4s %22s %9.2f %9.2f %9.2f %9.2f %8.0f\n", e.name.c_str(), e.score,
+                  e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after, e.heldout_nrmse_before,
+                  e.heldout_nrmse_after, e.delta_bic);
+    s << line;
+  }
+  s << "\nwhere the nominal residual lives:\n";
+  if (d.mismatch.band.found) {
+    s << "  band " << fixed(d.mismatch.band.low_hz, 3) << "-" << fixed(d.mismatch.band.high_hz, 3) << " Hz\n";
+  } else {
+    s << "  no frequency band where the input->residual model is significant\n";
+  }
+  for (const auto& r : d.mismatch.by_recording) {
+    s << "  " << r.name << " (op " << fixed(r.operating_point_mm, 1) << " mm): Nrmse " << fixed(r.nrmse_percent, 2)
+      << "%, RMS " << fixed(r.rms, 3) << " mm, mean " << fixed(r.mean, 3) << " mm" << (r.white ? "" : ", not white")
+      << (r.uncorrelated ? "" : ", correlated with u") << '\n';
+  }
+  for (const auto& g : d.mismatch.by_regime) {
+    if (g.samples) s << "  regime " << g.name << ": RMS " << fixed(g.rms, 3) << " mm over " << g.samples << " samples\n";
+  }
+  for (std::size_t k = 0; k < d.mismatch.windows.size() && k < 5; ++k) {
+    const auto& w = d.mismatch.windows[k];
+    s << "  window " << w.recording << " " << fixed(w.start_s, 1) << "-" << fixed(w.end_s, 1) << " s: RMS "
+      << fixed(w.rms, 3) << " mm;";
+    for (const auto& e : w.events) s << ' ' << e;
+    s << '\n';
+  }
+  return s.str();
+}
+
+std::string html_report(const Diagnosis& d, const std::string& title) {
+  std::ostringstream s;
+  s << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << esc(title)
+    << "</title><style>body{font-family:sans-serif;max-width:960px;margin:auto;padding:1em}"
+       "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+       "td:first-child,th:first-child{text-align:left}.sig{background:#e6f4e6}</style></head><body>";
+  s << "<h1>" << esc(title) << "</h1>";
+  if (!d.ok) {
+    s << "<p>Diagnosis failed: " << esc(d.message) << "</p></body></html>\n";
+    return s.str();
+  }
+  s << "<h2>Verdict: " << esc(d.verdict) << "</h2><p>" << esc(d.reason) << ".</p>";
+  s << "<p>Measurement noise " << fixed(d.noise) << " mm; nominal residual RMS " << fixed(d.nominal_rms)
+    << " mm; a perfect model would reach Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%.</p>";
+  s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>parameter</th><th>Nrmse fitted</th>"
+       "<th>after</th><th>Nrmse held-out</th><th>after</th><th>&#916;BIC</th></tr>";
+  for (const auto& e : d.effects) {
+    s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << esc(e.name) << "</td><td>" << fixed(e.score)
+      << "</td><td>" << esc(e.parameter.name) << " = " << fixed(e.parameter.value) << " &#177; "
+      << fixed(e.parameter.std) << ' ' << esc(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
+      << "</td><td>" << fixed(e.nrmse_after, 2) << "</td><td>" << fixed(e.heldout_nrmse_before, 2) << "</td><td>"
+      << fixed(e.heldout_nrmse_after, 2) << "</td><td>" << fixed(e.delta_bic, 0) << "</td></tr>";
+  }
+  s << "</table>";
+  s << "<h2>Where the mismatch lives</h2><p>";
+  if (d.mismatch.band.found) {
+    s << "Input&#8594;residual model significant in " << fixed(d.mismatch.band.low_hz) << "&#8211;"
+      << fixed(d.mismatch.band.high_hz) << " Hz";
+  } else {
+    s << "No frequency band where the input&#8594;residual model leaves its 99% region";
+  }
+  if (d.mismatch_after.band.found) {
+    s << "; after the correction: " << fixed(d.mismatch_after.band.low_hz) << "&#8211;"
+      << fixed(d.mismatch_after.band.high_hz) << " Hz.";
+  } else {
+    s << "; none after the correction.";
+  }
+  s << "</p><table><tr><th>recording</th><th>op [mm]</th><th>Nrmse before</th><th>after</th><th>RMS before</th>"
+       "<th>after</th><th>white before/after</th></tr>";
+  for (std::size_t i = 0; i < d.mismatch.by_recording.size(); ++i) {
+    const auto& b = d.mismatch.by_recording[i];
+    const auto& a = d.mismatch_after.by_recording[i];
+    s << "<tr><td>" << esc(b.name) << "</td><td>" << fixed(b.operating_point_mm, 1) << "</td><td>"
+      << fixed(b.nrmse_percent, 2) << "</td><td>" << fixed(a.nrmse_percent, 2) << "</td><td>" << fixed(b.rms)
+      << "</td><td>" << fixed(a.rms) << "</td><td>" << (b.white ? "yes" : "no") << " / " << (a.white ? "yes" : "no")
+      << "</td></tr>";
+  }
+  s << "</table><p>By regime:";
+  for (const auto& g : d.mismatch.by_regime) {
+    if (g.samples) s << ' ' << esc(g.name) << " RMS " << fixed(g.rms) << " mm (" << g.samples << " samples);";
+  }
+  s << " by event:";
+  for (const auto& g : d.mismatch.by_event) {
+    if (g.samples) s << ' ' << esc(g.name) << ' ' << fixed(g.rms) << " mm;";
+  }
+  s << "</p>";
+  for (const auto& r : d.series) {
+    std::vector<std::pair<double, double>> spans;
+    for (const auto& w : d.mismatch.windows) {
+      if (w.recording == r.name) spans.emplace_back(w.start_s, w.end_s);
+    }
+    std::vector<double> before(r.t.size()), after(r.t.size());
+    for (std::size_t k = 0; k < r.t.size(); ++k) {
+      before[k] = r.recorded[k] - r.nominal[k];
+      after[k] = r.recorded[k] - r.corrected[k];
+    }
+    const double split = r.fit_samples < r.t.size() ? r.t[r.fit_samples] : r.t.back();
+    s << "<h3>" << esc(r.name) << "</h3>";
+    s << svg_plot(r.t, {{&r.recorded, "#000", "recorded"}, {&r.nominal, "#1f77b4", "nominal"},
+                        {&r.corrected, "#d62728", "corrected"}},
+                  spans, "level [mm]", split);
+    s << svg_plot(r.t, {{&before, "#1f77b4", "residual, nominal"}, {&after, "#d62728", "residual, corrected"}}, spans,
+                  "residual [mm]", split);
+  }
+  s << "<p>Shaded: windows where the nominal residual is largest. Data and plots are inline; the page needs no "
+       "network.</p></body></html>\n";
+  return s.str();
+}
+
+}  // namespace canalsim::diagnosis

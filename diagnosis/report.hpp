@@ -1,0 +1,26 @@
+// Diagnosis output: the JSON document (fields of issue 5: verdict, effects, mismatch) and a
+// self-contained HTML page (inline SVG, no scripts fetched from anywhere).
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "diagnosis/diagnose.hpp"
+
+namespace canalsim::diagnosis {
+
+// verdict, reason, effects (ranked: name, score, parameters, nrmse_before, nrmse_after,
+// heldout_nrmse_before, heldout_nrmse_after, ...), mismatch (windows, band_hz, by_recording,
+// by_regime, by_event, by_level, by_channel), mismatch_after, residual_tests (before/after),
+// noise figures. Series are left out (they are in the HTML report).
+nlohmann::json to_json(const Diagnosis& diagnosis);
+
+// One HTML page: verdict, ranked table, per recording the recorded / nominal / corrected primary
+// level and the residual before and after, with the mismatch windows shaded.
+std::string html_report(const Diagnosis& diagnosis, const std::string& title);
+
+// A text summary for the terminal (verdict, ranked table, location).
+std::string text_summary(const Diagnosis& diagnosis);
+
+}  // namespace canalsim::diagnosis
