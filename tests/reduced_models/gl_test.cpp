@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <random>
 #include <numbers>
 
@@ -39,6 +41,12 @@ double ml_integral(double alpha, double s) {
     sum += std::exp(-r * s) * ra / (ra * ra + 2.0 * ra * std::cos(alpha * pi) + 1.0);
   }
   return std::sin(alpha * pi) / pi * sum * dv;
+}
+
+std::string scientific(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3e", v);
+  return buffer;
 }
 
 double mittag_leffler_neg(double alpha, double s) {
@@ -114,6 +122,7 @@ TEST(GlFullMemory, StepResponseMatchesOneMinusMittagLefflerAtFineSteps) {
       const double exact = 1.0 - mittag_leffler_neg(lambda, s);
       worst = std::max(worst, std::abs(x[k] - exact));
     }
+    RecordProperty(lambda == 0.5 ? "worst_error_lambda_0_5" : "worst_error_lambda_0_8", scientific(worst));
     EXPECT_LT(worst, 1e-3) << "lambda " << lambda;
   }
 }
@@ -128,6 +137,8 @@ TEST(GlShortMemory, SteadyStateShowsTheTruncationBias) {
   // Asymptotic form of the bias: Σ_{j≤N} w_j ≈ N^−λ / Γ(1−λ).
   const double asymptotic = 1.0 / (1.0 + T * std::pow(N * h, -lambda) / std::tgamma(1.0 - lambda));
   EXPECT_NEAR(x.back(), asymptotic, 0.01 * (1.0 - asymptotic));
+  RecordProperty("steady_state", std::to_string(x.back()));
+  RecordProperty("asymptotic_bias_formula", std::to_string(asymptotic));
   EXPECT_LT(x.back(), 0.99);  // the bias is real: the true steady state is 1
 }
 
@@ -140,7 +151,12 @@ TEST(GlFullMemory, FftDivideAndConquerEqualsDirectSummation) {
   for (double lambda : {0.35, 0.7, 1.3}) {
     const auto fast = solve_fractional_lag(f, 1.2, lambda, 0.13, {GlMemory::full, 0});
     const auto direct = solve_fractional_lag(f, 1.2, lambda, 0.13, {GlMemory::full_direct, 0});
-    for (std::size_t k = 0; k < n; ++k) ASSERT_NEAR(fast[k], direct[k], 1e-10) << "k " << k;
+    double worst = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      ASSERT_NEAR(fast[k], direct[k], 1e-10) << "k " << k;
+      worst = std::max(worst, std::abs(fast[k] - direct[k]));
+    }
+    RecordProperty("max_difference_lambda_" + std::to_string(lambda), scientific(worst));
   }
 }
 
