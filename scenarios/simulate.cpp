@@ -8,6 +8,7 @@
 #include "scenarios/prbs.hpp"
 #include "scenarios/sensors.hpp"
 #include "scenarios/signals.hpp"
+#include "solver/steady_state.hpp"
 
 namespace canalsim::scenarios {
 namespace {
@@ -231,33 +232,67 @@ BuiltCanal build_canal(const Scenario& s, const ExperimentSpec& e, const Drive& 
   return b;
 }
 
+namespace {
+
+struct InitialState {
+  std::string description;       // for the recording's metadata
+  double progress_weight = 0.0;  // share of the run's progress spent settling
+};
+
+// Brings the canal to the steady state of its operating point at t = 0 and presets the
+// reservoir PID so that the pump delivers the gate discharge.
+InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& options,
+                    const std::function<void(double)>& report) {
+  InitialState result;
+  const double t_settle = -std::max(options.settle_time, 0.0);
+  const double t_before = std::min(t_settle, -1e-9);  // strictly before the input starts
+  b.canal.set_time(t_before);
+  b.controlled->reset(t_before, b.controlled->command(t_before));
+  std::string newton_failure;
+  if (options.use_steady_state_solver) {
+    solver::SteadyStateOptions steady;
+    steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
+    const auto summary = solver::solve_steady_state(b.canal, steady);
+    if (summary.status) {
+      result.description = "steady state (Newton, " + std::to_string(summary.iterations) + " iterations)";
+    } else {
+      newton_failure = summary.status.message();
+    }
+  }
+  if (b.reservoir && b.head_gate) {
+    const double q = b.canal.reach(0).discharge().front();
+    b.reservoir->reservoir().start_at_steady_state(q);
+  }
+  if (result.description.empty()) {
+    // Time marching: chunks for the progress line.
+    const double duration = -t_before;
+    result.progress_weight = 0.5;
+    for (int k = 1; k <= 20; ++k) {
+      check(b.canal.advance_to(t_before + duration * k / 20.0), "settling");
+      report(result.progress_weight * k / 20.0);
+    }
+    result.description = "time marching " + format_number(duration) + " s" +
+                         (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
+  }
+  b.canal.set_time(0.0);
+  b.canal.reset_balance();
+  b.controlled->reset(0.0, b.controlled->opening(0.0));
+  return result;
+}
+
+}  // namespace
+
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
   BuiltCanal b = build_canal(s, e, options.drive);
   if (!b.controlled) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");
   const SensorSpec sensors = e.sensors.value_or(s.sensors);
 
-  // Settle at the operating point: the command holds its t = 0 value before t = 0.
-  const double t_start = -options.settle_time;
-  b.canal.set_time(t_start);
-  b.controlled->reset(t_start, b.controlled->command(t_start));
-  if (b.reservoir && b.head_gate) {
-    const auto& first = b.canal.reach(0);
-    const gates::SluiceGate law(gate_geometry(*s.head_gate).law);
-    const double q = s.head_gate->width_m *
-                     law.discharge(s.upstream.level_m, first.depth(0), b.controlled->opening(t_start));
-    b.reservoir->reservoir().start_at_steady_state(q);
-  }
+  // Start from the steady state of the operating point (the command holds its t = 0 value before
+  // t = 0): Newton on the discretised equations, or time marching if that fails or is not wanted.
   const auto report = [&](double fraction) {
     if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
   };
-  const double total = options.settle_time + e.duration_s;
-  const int settle_chunks = 20;
-  for (int k = 1; k <= settle_chunks; ++k) {
-    check(b.canal.advance_to(t_start + options.settle_time * k / settle_chunks), "settling " + e.name);
-    report(options.settle_time * k / settle_chunks / total);
-  }
-  b.canal.set_time(0.0);
-  b.controlled->reset(0.0, b.controlled->opening(0.0));
+  const InitialState initial = settle(b, s, options, report);
 
   // Sampling: every channel read at t_k = k h from the true state, then through its sensor.
   const double h = sensors.period_s;
@@ -318,7 +353,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
                          ? static_cast<double>(RegimeCode::submerged)
                          : static_cast<double>(RegimeCode::free));
     if (k % std::max<std::size_t>(1, samples / 100) == 0) {
-      report((options.settle_time + t) / total);
+      report(initial.progress_weight + (1.0 - initial.progress_weight) * t / e.duration_s);
     }
   }
   report(1.0);
@@ -335,6 +370,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.set_meta("operating_opening_mm", format_number(e.operating_opening_mm));
   rec.set_meta("sampling_period_s", format_number(h));
   rec.set_meta("generator", "canalsim simulate");
+  rec.set_meta("initial_state", initial.description);
   rec.set_column(columns::time, t_s);
   rec.set_column(columns::gate_command, u_mm);
   rec.set_column(columns::gate_position, in_mm(x_up.values()));

@@ -45,7 +45,7 @@ struct SimulateOptions {
   // Called with the fraction done in [0, 1], about every 1% of the run.
   std::function<void(double)> progress;
   Drive drive;
-  // Settling before t = 0 when the steady-state solve is not used or fails [s].
+  // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
 };

@@ -359,6 +359,39 @@ VolumeBalance Canal::total_balance() const {
   return t;
 }
 
+int Canal::total_cells() const {
+  int n = 0;
+  for (const Reach& r : reaches_) n += r.cells_;
+  return n;
+}
+
+void Canal::evaluate_rates(double t, std::vector<double>& rates) {
+  compute_fluxes(t);  // primitives, limited slopes, interior and end-face fluxes of every reach
+  const double g = options_.gravity;
+  rates.assign(2 * static_cast<std::size_t>(total_cells()), 0.0);
+  std::size_t c = 0;
+  for (const Reach& r : reaches_) {
+    const Section& s = r.section_;
+    const double friction = g * r.manning_n_ * r.manning_n_;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(r.cells_); ++i, ++c) {
+      // The same terms as the stage update (scheme.cpp), divided by dt.
+      const double hl = r.h_[i] - 0.5 * r.dh_[i], hr = r.h_[i] + 0.5 * r.dh_[i];
+      const double source = g * s.mean_area(hl, hr) * (r.dh_[i] - r.deta_[i]);
+      const bool wet = r.h_[i] > options_.dry_depth;
+      const double qlat = wet ? r.lateral_inflow_[i] : std::max(r.lateral_inflow_[i], 0.0);
+      const double a = r.area_[i], q = r.discharge_[i];
+      double dq = -(r.face_momentum_left_[i + 1] - r.face_momentum_right_[i] - source) / r.dx_ +
+                  std::min(qlat, 0.0) * r.u_[i];
+      if (wet && friction > 0.0 && a > 0.0) {
+        const double hydraulic_radius = a / s.wetted_perimeter(r.h_[i]);
+        dq -= friction * std::abs(q) * q / (a * std::pow(hydraulic_radius, 4.0 / 3.0));
+      }
+      rates[2 * c] = -(r.face_mass_[i + 1] - r.face_mass_[i]) / r.dx_ + qlat;
+      rates[2 * c + 1] = dq;
+    }
+  }
+}
+
 void Canal::reset_balance() {
   for (std::size_t ri = 0; ri < reaches_.size(); ++ri) {
     acc_[ri] = Accumulators{};

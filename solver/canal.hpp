@@ -111,6 +111,15 @@ class Canal {
 
   const StepStatistics& statistics() const { return stats_; }
 
+  // The semi-discrete right-hand side L(U) of the scheme for the current state at time t, the
+  // rates a step integrates: dA/dt and dQ/dt per cell, friction explicit (the update treats it
+  // linearly implicitly with k from the stage state, so a state with L(U) = 0 is a fixed point of
+  // every step, whatever dt). Layout: cells of all reaches in order, rates[2c] = dA/dt,
+  // rates[2c + 1] = dQ/dt. Takes no step and advances no boundary state (used by the steady-state
+  // solver, solver/steady_state.hpp).
+  void evaluate_rates(double t, std::vector<double>& rates);
+  int total_cells() const;
+
  private:
   struct EndConnection {
     std::shared_ptr<Boundary> boundary;

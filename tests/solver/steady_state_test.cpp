@@ -1,0 +1,112 @@
+// Steady state by Newton (KINSOL + KLU): the state long time marching converges to, reached in a
+// few dozen residual evaluations; failure is a returned status that leaves the state untouched.
+#include "solver/steady_state.hpp"
+
+#include <cmath>
+#include <gtest/gtest.h>
+
+#include "solver/boundary.hpp"
+
+namespace canalsim::solver {
+namespace {
+
+// Goutal & Maurel's subcritical bump (q = 4.42 m²/s, h_out = 2 m) with Manning friction, so that
+// both the bed and friction shape the profile.
+ReachSpec bump_channel(int cells, double length = 25.0) {
+  ReachSpec spec;
+  spec.length = length;
+  spec.cells = cells;
+  spec.section = {1.0, 0.0};
+  spec.manning_n = 0.03;
+  for (int i = 0; i < cells; ++i) {
+    const double x = (i + 0.5) * length / cells;
+    spec.bed_elevation.push_back(x > 8.0 && x < 12.0 ? 0.2 - 0.05 * (x - 10.0) * (x - 10.0) : 0.0);
+  }
+  spec.initial_depth.assign(static_cast<std::size_t>(cells), 2.0);
+  return spec;
+}
+
+void close_bump_channel(Canal& canal, int upstream_reach, int downstream_reach) {
+  ASSERT_TRUE(canal.set_boundary(upstream_reach, End::upstream, FixedDischargeBoundary::constant(4.42)));
+  ASSERT_TRUE(canal.set_boundary(downstream_reach, End::downstream, FixedLevelBoundary::depth(2.0)));
+}
+
+double max_depth_difference(const Canal& a, const Canal& b) {
+  double worst = 0.0;
+  for (int r = 0; r < a.reach_count(); ++r) {
+    for (int i = 0; i < a.reach(r).cells(); ++i) {
+      worst = std::max(worst, std::abs(a.reach(r).depth(i) - b.reach(r).depth(i)));
+    }
+  }
+  return worst;
+}
+
+TEST(SteadyState, NewtonGivesTheStateLongTimeMarchingConvergesTo) {
+  Canal newton, marching;
+  ASSERT_TRUE(newton.add_reach(bump_channel(50)));
+  ASSERT_TRUE(marching.add_reach(bump_channel(50)));
+  close_bump_channel(newton, 0, 0);
+  close_bump_channel(marching, 0, 0);
+  const auto summary = solve_steady_state(newton);
+  ASSERT_TRUE(summary.status) << summary.status.message();
+  EXPECT_LT(summary.max_depth_rate, 1e-9);
+  ASSERT_TRUE(marching.advance_to(1500.0));
+  EXPECT_LT(max_depth_difference(newton, marching), 1e-8);
+}
+
+TEST(SteadyState, AStepFromItCarriesTheInflowOutAndStoresNothing) {
+  // Mass conservation at steady state: the face fluxes are equal, so a step passes the inflow to
+  // the outlet and the stored volume does not change.
+  Canal canal;
+  ASSERT_TRUE(canal.add_reach(bump_channel(80)));
+  close_bump_channel(canal, 0, 0);
+  ASSERT_TRUE(solve_steady_state(canal).status);
+  canal.reset_balance();
+  ASSERT_TRUE(canal.step());
+  const VolumeBalance b = canal.total_balance();
+  EXPECT_NEAR(b.outflow, b.inflow, 1e-9 * b.inflow);
+  EXPECT_LT(std::abs(b.storage_change()), 1e-9 * b.inflow);
+}
+
+TEST(SteadyState, TwoReachesJoinedByALinkMatchTimeMarching) {
+  Canal newton, marching;
+  for (Canal* c : {&newton, &marching}) {
+    ASSERT_TRUE(c->add_reach(bump_channel(30)));
+    ReachSpec second = bump_channel(20, 15.0);
+    second.bed_elevation.assign(20, 0.0);
+    ASSERT_TRUE(c->add_reach(second));
+    ASSERT_TRUE(c->connect(0, 1, std::make_shared<ContinuousLink>()));
+    close_bump_channel(*c, 0, 1);
+  }
+  const auto summary = solve_steady_state(newton);
+  ASSERT_TRUE(summary.status) << summary.status.message();
+  ASSERT_TRUE(marching.advance_to(1500.0));
+  EXPECT_LT(max_depth_difference(newton, marching), 1e-8);
+}
+
+TEST(SteadyState, NoSteadyStateIsAReturnedFailureThatKeepsTheState) {
+  // Inflow into a channel closed by a wall: the level rises for ever.
+  Canal canal;
+  ASSERT_TRUE(canal.add_reach(bump_channel(20)));
+  ASSERT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(1.0)));
+  ASSERT_TRUE(canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>()));
+  const std::vector<double> before = canal.reach(0).area();
+  SteadyStateOptions options;
+  options.continuation_attempts = 0;
+  const auto summary = solve_steady_state(canal, options);
+  EXPECT_FALSE(summary.status);
+  EXPECT_NE(summary.status.message().find("steady state not found"), std::string::npos);
+  EXPECT_EQ(canal.reach(0).area(), before);
+}
+
+TEST(SteadyState, InvalidOptionsNameTheField) {
+  SteadyStateOptions options;
+  options.depth_tolerance = -1.0;
+  EXPECT_NE(options.validate().message().find("depth_tolerance"), std::string::npos);
+  options = {};
+  options.max_iterations = 0;
+  EXPECT_NE(options.validate().message().find("max_iterations"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canalsim::solver
