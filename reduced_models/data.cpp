@@ -1,12 +1,22 @@
 #include "reduced_models/data.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <numeric>
 #include <sstream>
 
 namespace canalsim::reduced {
 namespace {
+
+std::optional<double> operating_point_mm(const Recording& recording) {
+  const std::string text = recording.meta("operating_opening_mm");
+  if (text.empty()) return std::nullopt;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
 
 std::string number(double v) {
   std::ostringstream out;
@@ -55,7 +65,10 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
                      " mm): the input has no excitation, so no model can be identified "
                      "(expected e.g. a PRBS around the operating point)");
   }
-  d.u0_mm = options.u0_mm.value_or(d.u_mm.front());
+  // The operating point the input moves about: the recording's `operating_opening_mm` metadata
+  // when it has one (the canal settled there before the PRBS started, which may begin on +5 mm),
+  // else the first command.
+  d.u0_mm = options.u0_mm.value_or(operating_point_mm(recording).value_or(d.u_mm.front()));
   if (options.y0_mm) {
     d.y0_mm = *options.y0_mm;
   } else {

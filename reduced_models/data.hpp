@@ -19,7 +19,7 @@ struct DataOptions {
   std::optional<double> upstream_level_mm;
   // Operating point. By default u0 = u(0) and y0 = the mean of y_dwe over the samples before
   // u first changes (at most `rest_samples_max` of them): the pool is at rest there.
-  std::optional<double> u0_mm;
+  std::optional<double> u0_mm;  // default: the recording's operating_opening_mm metadata, else u[0]
   std::optional<double> y0_mm;
   std::size_t rest_samples_max = 50;
   // An input whose range max(u) − min(u) is at most this carries no excitation (rejected).

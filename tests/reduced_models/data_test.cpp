@@ -38,6 +38,16 @@ TEST(PrepareData, UsesAGivenOperatingPoint) {
   EXPECT_DOUBLE_EQ(d.y0_mm, 39.0);
 }
 
+// A simulated experiment settles at the operating point and then starts its PRBS, possibly on
+// the +5 mm bit: the metadata, not the first command, is the point the canal rested at.
+TEST(PrepareData, TakesTheOperatingPointFromTheRecordingsMetadata) {
+  Recording r = recording({20, 20, 10, 20}, {40, 40, 40, 41});
+  r.set_meta("operating_opening_mm", "15");
+  EXPECT_DOUBLE_EQ(prepare_data(r).u0_mm, 15.0);
+  r.set_meta("operating_opening_mm", "not a number");
+  EXPECT_DOUBLE_EQ(prepare_data(r).u0_mm, 20.0);
+}
+
 TEST(PrepareData, FillsAConstantUpstreamLevelOnlyWhenTheColumnIsAbsent) {
   DataOptions o;
   o.upstream_level_mm = 60.0;
