@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "scenarios/prbs.hpp"
@@ -160,7 +161,13 @@ std::function<double(double)> command_signal(const ExperimentSpec& e, const Driv
   if (drive.recording) {
     auto series = std::make_shared<SeriesSignal>(
         SeriesSignal::from_recording(*drive.recording, columns::gate_command, Interpolation::zero_order_hold));
-    return [series](double t) { return series->value(t); };
+    // Before t = 0 the canal rested at the recording's operating point (its metadata, as
+    // `canalsim simulate` writes it), else at the first command.
+    const std::string meta = drive.recording->meta("operating_opening_mm");
+    char* end = nullptr;
+    const double rest_mm = meta.empty() ? NAN : std::strtod(meta.c_str(), &end);
+    const double rest = std::isfinite(rest_mm) && end != meta.c_str() ? rest_mm * kMm : series->value(0.0);
+    return [series, rest](double t) { return t < 0.0 ? rest : series->value(t); };
   }
   const InputSpec& in = e.input;
   SignalPtr signal;
@@ -259,9 +266,11 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& opt
       newton_failure = summary.status.message();
     }
   }
-  if (b.reservoir && b.head_gate) {
+  if (b.head_gate) {
+    // The first sample's discharge: the gate has passed no step yet, so report the steady flow.
     const double q = b.canal.reach(0).discharge().front();
-    b.reservoir->reservoir().start_at_steady_state(q);
+    b.head_gate->on_step_accepted(b.canal.time(), 0.0, q);
+    if (b.reservoir) b.reservoir->reservoir().start_at_steady_state(q);
   }
   if (result.description.empty()) {
     // Time marching: chunks for the progress line.

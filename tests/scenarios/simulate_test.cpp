@@ -1,0 +1,122 @@
+// Experiments on the built-in laboratory canal: the recording has the paper's format; the run
+// starts from the steady state long time marching reaches; the calibrated canal shows the
+// paper's flow regimes by condition (23); the gate-to-sensor delay is the gravity-wave travel
+// time computed in closed form from the steady state; a drive recording is replayed.
+#include "scenarios/simulate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <gtest/gtest.h>
+
+#include "gates/sluice_gate.hpp"
+#include "scenarios/builtin.hpp"
+#include "solver/steady_state.hpp"
+
+namespace canalsim::scenarios {
+namespace {
+
+ExperimentSpec lab_experiment(double opening_mm, double duration_s, InputKind kind = InputKind::prbs) {
+  ExperimentSpec e;
+  e.name = "test";
+  e.operating_opening_mm = opening_mm;
+  e.duration_s = duration_s;
+  e.input.kind = kind;
+  return e;
+}
+
+TEST(Simulate, LabRecordingHasThePaperFormatAndResolution) {
+  const Scenario lab = builtin_scenario("lab");
+  const Recording rec = simulate(lab, lab_experiment(25.0, 30.0));
+  ASSERT_EQ(rec.size(), 231u);  // 30 s / 0.13 s + 1
+  EXPECT_NEAR(rec.sample_period(), 0.13, 1e-12);
+  for (const char* c : {"t_s", "u_mm", "x_up_mm", "y_up_mm", "y_dw_mm", "y_dwe_mm", "q_lps", "regime"}) {
+    EXPECT_TRUE(rec.has(c)) << c;
+  }
+  for (double y : rec.column("y_dwe_mm")) {
+    EXPECT_NEAR(y / 0.05, std::round(y / 0.05), 1e-6) << "eq. (17): multiples of 0.05 mm";
+  }
+  for (double u : rec.column("u_mm")) EXPECT_TRUE(u == 20.0 || u == 30.0) << "PRBS 25 ± 5 mm";
+  EXPECT_NE(rec.meta("initial_state").find("Newton"), std::string::npos);
+}
+
+TEST(Simulate, NewtonInitialStateIsTheOneTimeMarchingReaches) {
+  // A fixed 60 mm supply: the reservoir's PID would only slow the marching down.
+  Scenario lab = builtin_scenario("lab");
+  lab.upstream.kind = UpstreamKind::level;
+  const ExperimentSpec e = lab_experiment(25.0, 10.0, InputKind::constant);
+  BuiltCanal newton = build_canal(lab, e), marching = build_canal(lab, e);
+  newton.controlled->reset(0.0, 0.025);
+  marching.controlled->reset(0.0, 0.025);
+  ASSERT_TRUE(solver::solve_steady_state(newton.canal).status);
+  ASSERT_TRUE(marching.canal.advance_to(1500.0));
+  double worst = 0.0;
+  for (int i = 0; i < newton.canal.reach(0).cells(); ++i) {
+    worst = std::max(worst, std::abs(newton.canal.reach(0).depth(i) - marching.canal.reach(0).depth(i)));
+  }
+  EXPECT_LT(worst, 1e-8);
+}
+
+// The paper's condition (23) at the operating point (steady state, constant input).
+gates::GateRegime regime_at(double opening_mm) {
+  const Scenario lab = builtin_scenario("lab");
+  const Recording rec = simulate(lab, lab_experiment(opening_mm, 1.0, InputKind::constant));
+  return gates::classify_regime(rec.column("y_up_mm").back() * 1e-3,
+                                rec.column("y_dwe_mm").back() * 1e-3, opening_mm * 1e-3);
+}
+
+TEST(Simulate, LabCanalHasThePapersRegimesAtItsOperatingPoints) {
+  EXPECT_EQ(regime_at(13.0), gates::GateRegime::submerged);  // op1*
+  EXPECT_EQ(regime_at(15.0), gates::GateRegime::submerged);  // op1
+  EXPECT_EQ(regime_at(25.0), gates::GateRegime::submerged);  // op2
+  EXPECT_EQ(regime_at(30.0), gates::GateRegime::submerged);  // the border lies above 30 mm
+  EXPECT_EQ(regime_at(38.0), gates::GateRegime::free);       // ... and below 38 mm
+  EXPECT_EQ(regime_at(43.0), gates::GateRegime::free);       // op3
+  EXPECT_EQ(regime_at(45.0), gates::GateRegime::free);       // op4
+}
+
+TEST(Simulate, GateToSensorDelayIsTheGravityWaveTravelTime) {
+  // A 5 mm step at t = 10 s reaches the downstream sensor after L / (u + c), with u and
+  // c = sqrt(g h) of the steady pool (closed form; the paper identifies 4.9 s).
+  const Scenario lab = builtin_scenario("lab");
+  ExperimentSpec e = lab_experiment(25.0, 25.0, InputKind::step);
+  e.input.start_s = 10.0;
+  e.sensors = lab.sensors;
+  e.sensors->resolution_mm = 0.0;
+  const Recording rec = simulate(lab, e);
+  const auto& y = rec.column("y_dwe_mm");
+  const double h = y.front() * 1e-3;
+  const double u = rec.column("q_lps").front() * 1e-3 / (0.08 * h);
+  const double expected = lab.pools.front().length_m / (u + std::sqrt(9.81 * h));
+  double arrival = -1.0;
+  for (std::size_t k = 0; k < y.size(); ++k) {
+    if (std::abs(y[k] - y.front()) > 0.5) {  // half-way up the ~1 mm front
+      arrival = rec.column("t_s")[k] - 10.0;
+      break;
+    }
+  }
+  EXPECT_NEAR(arrival, expected, 0.1 * expected);
+  EXPECT_NEAR(arrival, 4.9, 0.5);
+}
+
+TEST(Simulate, DriveRecordingIsReplayed) {
+  // A step that switches on a sample instant: the replayed (zero-order-hold) command is then the
+  // same signal, so the run is the same, from the same operating point (the metadata's).
+  const Scenario lab = builtin_scenario("lab");
+  ExperimentSpec step = lab_experiment(25.0, 20.0, InputKind::step);
+  step.input.start_s = 20 * 0.13;
+  const Recording first = simulate(lab, step);
+  SimulateOptions options;
+  options.drive.recording = &first;
+  const Recording replay = simulate(lab, lab_experiment(35.0, 20.0), options);  // its own input ignored
+  EXPECT_EQ(replay.column("u_mm"), first.column("u_mm"));
+  EXPECT_EQ(replay.column("y_dwe_mm"), first.column("y_dwe_mm"));
+}
+
+TEST(Simulate, ScenarioWithoutAControlledGateIsRejected) {
+  Scenario lab = builtin_scenario("lab");
+  lab.head_gate->controlled = false;
+  EXPECT_THROW(simulate(lab, lab_experiment(25.0, 5.0)), InputError);
+}
+
+}  // namespace
+}  // namespace canalsim::scenarios
