@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
 #ifdef CANALSIM_HAVE_FIT
   canalsim::cli::add_fit_command(app);
 #endif
+#ifdef CANALSIM_HAVE_REPRODUCE
+  canalsim::cli::add_reproduce_command(app);
+#endif
   canalsim::cli::add_scenarios_command(app);
   canalsim::cli::add_simulate_command(app);
 #ifdef CANALSIM_HAVE_DIAGNOSE
