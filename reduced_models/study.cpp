@@ -512,7 +512,6 @@ Spectrum prbs_spectrum(const ExperimentData& d, const StudyOptions& options) {
   s.bandwidth_design_rad_s = two_pi * 0.5 * (a + b) / Tc;
   s.experiment = d.source;
   const double omega_max = 2.5 * two_pi / Tc;
-  double peak = 0.0;
   for (int k = 1;; ++k) {
     const double w = two_pi * k / period;
     if (w > omega_max) break;
@@ -529,12 +528,25 @@ Spectrum prbs_spectrum(const ExperimentData& d, const StudyOptions& options) {
     s.magnitude.push_back(std::abs(sum) * d.h);
     s.envelope.push_back(Tc * std::sqrt(N + 1.0) * std::abs(sinc));
     s.step.push_back(1.0 / w);
-    peak = std::max(peak, s.magnitude.back());
   }
-  // Measured bandwidth: the last line ≥ peak/√2 before the first null of the envelope (the lines
-  // of an m-sequence follow the envelope, so this is where the envelope crosses max/√2).
-  for (std::size_t i = 0; i < s.omega.size() && s.omega[i] < two_pi / Tc; ++i) {
-    if (s.magnitude[i] >= peak / std::sqrt(2.0)) s.bandwidth_measured_rad_s = s.omega[i];
+  // Measured bandwidth: the lines of a sampled m-sequence scatter around the envelope (the
+  // sampling period does not divide the clock period), so the magnitude is first smoothed (RMS over
+  // ±4 lines); the bandwidth is where the smoothed magnitude first falls below its maximum / √2.
+  std::vector<double> smooth(s.magnitude.size());
+  const std::size_t half = 4;
+  for (std::size_t i = 0; i < smooth.size(); ++i) {
+    const std::size_t a0 = i >= half ? i - half : 0, a1 = std::min(smooth.size(), i + half + 1);
+    double sum = 0.0;
+    for (std::size_t k = a0; k < a1; ++k) sum += s.magnitude[k] * s.magnitude[k];
+    smooth[i] = std::sqrt(sum / static_cast<double>(a1 - a0));
+  }
+  const double top = smooth.empty() ? 0.0 : *std::max_element(smooth.begin(), smooth.end());
+  for (std::size_t i = 1; i < smooth.size(); ++i) {
+    if (smooth[i] < top / std::sqrt(2.0) && smooth[i - 1] >= top / std::sqrt(2.0)) {
+      const double f = (smooth[i - 1] - top / std::sqrt(2.0)) / (smooth[i - 1] - smooth[i]);
+      s.bandwidth_measured_rad_s = s.omega[i - 1] + f * (s.omega[i] - s.omega[i - 1]);
+      break;
+    }
   }
   return s;
 }
@@ -927,7 +939,7 @@ function draw() {
       {name: 'PRBS lines (recorded command)', x: s.omega, y: s.magnitude, stem: true, color: '#1f77b4'},
       {name: 'envelope Tc √(N+1) |sinc|', x: s.omega, y: s.envelope, color: '#222'},
       {name: 'unit step 1/ω', x: s.omega, y: s.step, color: '#d62728'},
-      {name: 'max/√2 (−3 dB)', x: [s.omega[0], s.omega[s.omega.length - 1]],
+      {name: 'envelope max/√2 (−3 dB)', x: [s.omega[0], s.omega[s.omega.length - 1]],
        y: [s.peak / Math.SQRT2, s.peak / Math.SQRT2], dash: '4 3', color: '#2ca02c'}]});
 }
 draw();
@@ -1113,7 +1125,7 @@ std::string to_html(const StudyResult& r, const std::map<std::string, Recording>
     data["regimes"].push_back(f);
   }
   double peak = 0.0;
-  for (double v : r.spectrum.magnitude) peak = std::max(peak, v);
+  for (double v : r.spectrum.envelope) peak = std::max(peak, v);
   data["spectrum"] = {{"omega", thin(r.spectrum.omega, 0, 4)},
                       {"magnitude", thin(r.spectrum.magnitude, 0, 4)},
                       {"envelope", thin(r.spectrum.envelope, 0, 4)},

@@ -140,7 +140,7 @@ struct Spectrum {
   std::vector<double> envelope;   // Tc √(N+1) |sinc(ω Tc / 2π)|
   std::vector<double> step;       // |1/(jω)| of a unit step, for comparison (paper Fig. 4)
   double bandwidth_design_rad_s = 0.0;    // half-power point of the envelope
-  double bandwidth_measured_rad_s = 0.0;  // highest line ≥ max/√2 before the envelope falls below
+  double bandwidth_measured_rad_s = 0.0;  // where the smoothed lines fall below max/√2
   std::string experiment;
 };
 
