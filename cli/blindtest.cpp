@@ -21,6 +21,7 @@ struct BlindtestArguments {
   int threads = 2;
   double duration = 0.0;
   std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
+  std::vector<std::string> effects;
   bool verbose = false;
 };
 
@@ -32,6 +33,7 @@ void run(const BlindtestArguments& args) {
   options.threads = args.threads;
   options.duration_s = args.duration;
   options.experiments = args.experiments;
+  options.effects = args.effects;
   if (const std::string problem = options.validate(); !problem.empty()) throw InputError("blindtest: " + problem);
   Progress progress("blind test, " + std::to_string(args.trials) + " trials on " + std::to_string(args.threads) +
                     " threads");
@@ -65,6 +67,7 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "Trials in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_option("--duration", args->duration, "Shorten every experiment to this many seconds (default: full)");
   cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial (default op1 op2 op3 op4)");
+  cmd->add_option("--effects", args->effects, "Draw only these effects (and none); default the whole catalog");
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
   cmd->callback([args] { run(*args); });
 }

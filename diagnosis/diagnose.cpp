@@ -42,6 +42,7 @@ struct Prepared {
   Channels data;              // the compared channels the recording has (after the warm-up)
   double operating_point_mm = 0.0;
   std::size_t skip = 0;       // warm-up samples dropped from every series
+  bool clocked = false;       // the drive switches at reconstructed clock instants
   std::size_t n = 0, n_fit = 0;
 };
 
@@ -111,16 +112,28 @@ Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
   return out;
 }
 
-// Gate position under a constant-speed actuator (paper eq. 16) driven by the replayed command:
-// within each sample interval the command holds u_k for (1 - lead) h and u_{k+1} for lead h.
-std::vector<double> rate_limited_position(const std::vector<double>& u, double speed_mm_s, double h, double lead) {
-  std::vector<double> x(u.size());
-  if (u.empty()) return x;
-  auto move = [](double from, double to, double step) { return from + std::clamp(to - from, -step, step); };
-  x[0] = u[0];
-  for (std::size_t k = 0; k + 1 < u.size(); ++k) {
-    const double mid = move(x[k], u[k], speed_mm_s * (1.0 - lead) * h);
-    x[k + 1] = move(mid, u[k + 1], speed_mm_s * lead * h);
+// Gate position under a constant-speed actuator (paper eq. 16) driven by the replayed command
+// (the drive's t_s/u_mm step function, exactly as the simulation replays it), at `samples`.
+std::vector<double> rate_limited_position(const Recording& drive, const std::vector<double>& samples, double speed_mm_s) {
+  const auto& ct = drive.column(columns::time);
+  const auto& cu = drive.column(columns::gate_command);
+  // An infinite speed (or inf * 0) is the ideal actuator: at the command.
+  auto move = [](double from, double to, double step) {
+    return std::isfinite(step) ? from + std::clamp(to - from, -step, step) : to;
+  };
+  std::vector<double> x;
+  x.reserve(samples.size());
+  double pos = cu.front(), now = ct.front();
+  std::size_t j = 0;
+  for (double s : samples) {
+    while (j + 1 < ct.size() && ct[j + 1] <= s) {
+      pos = move(pos, cu[j], speed_mm_s * (ct[j + 1] - now));
+      now = ct[j + 1];
+      ++j;
+    }
+    pos = move(pos, cu[j], speed_mm_s * (s - now));
+    now = s;
+    x.push_back(pos);
   }
   return x;
 }
@@ -136,6 +149,8 @@ struct Point {
 struct Costs {
   double fit = 0.0, heldout = 0.0;
   double nrmse_fit = 0.0, nrmse_heldout = 0.0;
+  // Per-channel mean squared residual (raw units²) on the fitted and held-out parts.
+  std::map<std::string, double> mse_fit, mse_heldout;
 };
 
 class Engine {
@@ -147,6 +162,11 @@ class Engine {
   EffectResult evaluate_candidate(Effect effect);
   Point evaluate(Effect effect, double theta);
   Costs costs(const std::vector<Channels>& prediction) const;
+  // Channel-balanced cost: the mean over channels of MSE_c / MSE_c(nominal), each nominal MSE
+  // floored at a sensor-noise level, so an effect that explains one channel's residual counts
+  // however small that channel's share of the weighted cost (a 0.1 mm lattice error in the
+  // levels next to gate-position glitches).
+  double balanced(const Costs& c, bool heldout) const;
 
   const std::vector<Prepared>& recordings() const { return recs_; }
   const std::vector<Channels>& nominal() const { return nominal_; }
@@ -166,6 +186,7 @@ class Engine {
   Point secant_fit(Effect effect, const Point& start, int& sims);
   Point rate_limit_from_position(int& sims);
   double lattice_resolution() const;
+  double heldout_coherence(double r) const;
   double correlation_inflation() const { return inflation_; }
 
   const Scenario& base_;
@@ -178,6 +199,7 @@ class Engine {
   std::vector<Channels> nominal_;    // nominal, scenario sensors
   std::vector<double> inflow_m3s_;
   Point nominal_point_;
+  Costs nominal_costs_;
   double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
   std::size_t fit_samples_ = 0;
   std::map<std::string, Point> best_;
@@ -229,6 +251,28 @@ void Engine::prepare(const std::vector<Recording>& recordings) {
       }
       p.drive.names.push_back(name);
       p.drive.columns.push_back(std::move(v));
+    }
+    const bool upstream_replayed = o_.use_recorded_upstream && rec.has(columns::upstream_level);
+    if (o_.reconstruct_clock && !upstream_replayed) {
+      const std::vector<double> switches = command_switch_times(t, u);
+      if (!switches.empty()) {
+        // A drive of the command alone: the operating point before t = 0, u[0] from t = 0,
+        // then each change at its reconstructed instant.
+        std::vector<double> dt{-1e-3 * period_, 0.0}, du{op, u.front()};
+        std::size_t j = 0;
+        for (std::size_t k = 1; k < total; ++k) {
+          if (u[k] == u[k - 1]) continue;
+          const double at = switches[j++] - t.front();
+          if (at <= dt.back()) continue;
+          dt.push_back(at);
+          du.push_back(u[k]);
+        }
+        p.drive = Recording{};
+        p.drive.source = rec.source;
+        p.drive.names = {columns::time, columns::gate_command};
+        p.drive.columns = {dt, du};
+        p.clocked = true;
+      }
     }
     recs_.push_back(std::move(p));
   }
@@ -308,10 +352,15 @@ Costs Engine::costs(const std::vector<Channels>& prediction) const {
       const auto it = prediction[i].find(name);
       if (it == prediction[i].end()) continue;
       const double w = weight_.at(name);
+      double sf = 0.0, sh = 0.0;
       for (std::size_t k = 0; k < p.n; ++k) {
         const double e = y[k] - it->second[k];
-        (k < p.n_fit ? c.fit : c.heldout) += w * e * e;
+        (k < p.n_fit ? sf : sh) += e * e;
       }
+      c.fit += w * sf;
+      c.heldout += w * sh;
+      c.mse_fit[name] += sf;
+      c.mse_heldout[name] += sh;
       fit_n += static_cast<double>(p.n_fit);
       held_n += static_cast<double>(p.n - p.n_fit);
     }
@@ -323,9 +372,34 @@ Costs Engine::costs(const std::vector<Channels>& prediction) const {
   }
   c.fit /= std::max(fit_n, 1.0);
   c.heldout /= std::max(held_n, 1.0);
+  for (auto& [name, v] : c.mse_fit) {
+    double nf = 0.0, nh = 0.0;
+    for (const auto& p : recs_) {
+      if (p.data.count(name)) {
+        nf += static_cast<double>(p.n_fit);
+        nh += static_cast<double>(p.n - p.n_fit);
+      }
+    }
+    v /= std::max(nf, 1.0);
+    c.mse_heldout[name] /= std::max(nh, 1.0);
+  }
   c.nrmse_fit /= static_cast<double>(std::max<std::size_t>(recs_.size(), 1));
   c.nrmse_heldout /= static_cast<double>(std::max<std::size_t>(recs_.size(), 1));
   return c;
+}
+
+double Engine::balanced(const Costs& c, bool heldout) const {
+  const auto& mse = heldout ? c.mse_heldout : c.mse_fit;
+  const auto& reference = heldout ? nominal_costs_.mse_heldout : nominal_costs_.mse_fit;
+  double sum = 0.0;
+  int count = 0;
+  for (const auto& [name, v] : mse) {
+    const double floor = name == columns::discharge ? 0.003 : 0.03;
+    const auto it = reference.find(name);
+    sum += v / std::max(it == reference.end() ? 0.0 : it->second, floor * floor);
+    ++count;
+  }
+  return count ? sum / count : 0.0;
 }
 
 void Engine::simulate_nominal() {
@@ -342,6 +416,7 @@ void Engine::simulate_nominal() {
     }
     inflow_m3s_.push_back(q);
   }
+  nominal_costs_ = costs(nominal_);
   nominal_point_.theta = std::numeric_limits<double>::quiet_NaN();
   nominal_point_.prediction = nominal_;
   nominal_point_.r = fit_residuals(nominal_);
@@ -429,12 +504,19 @@ Point Engine::secant_fit(Effect effect, const Point& start, int& sims) {
 // The rate limit shows directly in the recorded gate position: fit the actuator speed to x_up
 // against the command (golden section on θ = 1/v), then simulate once at the estimate.
 Point Engine::rate_limit_from_position(int& sims) {
-  const double h = period_, lead = o_.command_lead_samples;
+  std::vector<std::vector<double>> instants;
+  for (const auto& p : recs_) {
+    std::vector<double> at(p.n);
+    for (std::size_t k = 0; k < p.n; ++k) at[k] = static_cast<double>(p.skip + k) * period_;
+    instants.push_back(std::move(at));
+  }
   auto cost = [&](double theta) {
     double s = 0.0;
-    for (const auto& p : recs_) {
+    for (std::size_t i = 0; i < recs_.size(); ++i) {
+      const Prepared& p = recs_[i];
       const auto& x = p.data.at(columns::gate_position);
-      const std::vector<double> m = theta <= 0.0 ? p.u : rate_limited_position(p.u, 1.0 / theta, h, lead);
+      const std::vector<double> m =
+          rate_limited_position(p.drive, instants[i], theta <= 0.0 ? std::numeric_limits<double>::infinity() : 1.0 / theta);
       for (std::size_t k = 0; k < p.n_fit; ++k) s += (x[k] - m[k]) * (x[k] - m[k]);
     }
     return s;
@@ -464,15 +546,41 @@ Point Engine::rate_limit_from_position(int& sims) {
   return evaluate(Effect::gate_rate_limit, best_theta);
 }
 
+// Least-squares lattice step: with k_i = nint(y_i / r), r = Σ y_i k_i / Σ k_i². Levels of tens of
+// millimetres sit ~100 steps from zero, so the scan's 0.005 mm grid is refined to ~1e-5 mm; a
+// step off by 1% would put the model's lattice a whole step away from the recorded one.
+double refine_lattice(const std::vector<const std::vector<double>*>& series, double r) {
+  for (int it = 0; it < 4; ++it) {
+    double yk = 0.0, kk = 0.0;
+    for (const auto* y : series) {
+      for (double v : *y) {
+        const double k = std::round(v / r);
+        yk += v * k;
+        kk += k * k;
+      }
+    }
+    if (!(kk > 0.0)) break;
+    r = yk / kk;
+  }
+  return r;
+}
+
 // The largest resolution r whose lattice r·k holds the recorded levels: |mean exp(2πi y/r)| near 1
 // over a channel that spans at least six lattice steps. The scenario's resolution when none does.
 double Engine::lattice_resolution() const {
-  std::vector<const std::vector<double>*> series;
+  // Differences from each series' first sample: on the lattice when the samples are, and only
+  // tens of steps from zero, so a coarse scan already finds the right multiples.
+  std::vector<std::vector<double>> diffs;
   for (const auto& p : recs_) {
     for (const auto& [c, y] : p.data) {
-      if (is_level(c)) series.push_back(&y);
+      if (!is_level(c) || y.empty()) continue;
+      std::vector<double> d(y.size());
+      for (std::size_t k = 0; k < y.size(); ++k) d[k] = y[k] - y.front();
+      diffs.push_back(std::move(d));
     }
   }
+  std::vector<const std::vector<double>*> series;
+  for (const auto& d : diffs) series.push_back(&d);
   for (double r = info(Effect::sensor_quantization).theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
     double coherent = 0.0, total = 0.0;
     for (const auto* y : series) {
@@ -483,9 +591,23 @@ double Engine::lattice_resolution() const {
       coherent += std::abs(s);
       total += static_cast<double>(y->size());
     }
-    if (total > 0.0 && coherent / total > 0.9) return r;
+    if (total > 0.0 && coherent / total > 0.9) return refine_lattice(series, r);
   }
   return sensors_.resolution_mm;
+}
+
+// Lattice coherence |mean exp(2πi (y - y_first)/r)| of the held-out recorded levels.
+double Engine::heldout_coherence(double r) const {
+  std::complex<double> sum = 0.0;
+  double count = 0.0;
+  for (const auto& p : recs_) {
+    for (const auto& [c, y] : p.data) {
+      if (!is_level(c) || p.n_fit >= y.size()) continue;
+      for (std::size_t k = p.n_fit; k < y.size(); ++k) sum += std::polar(1.0, 2.0 * std::numbers::pi * (y[k] - y[p.n_fit]) / r);
+      count += static_cast<double>(y.size() - p.n_fit);
+    }
+  }
+  return count > 0.0 ? std::abs(sum) / count : 0.0;
 }
 
 EffectResult Engine::evaluate_candidate(Effect effect) {
@@ -494,13 +616,13 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   out.name = e.name;
   out.parameter.name = e.parameter;
   out.parameter.unit = e.unit;
-  const Costs before = costs(nominal_);
-  out.cost_before = before.fit;
-  out.heldout_cost_before = before.heldout;
+  const Costs& before = nominal_costs_;
+  out.cost_before = balanced(before, false);
+  out.heldout_cost_before = balanced(before, true);
   out.nrmse_before = out.nrmse_after = before.nrmse_fit;
   out.heldout_nrmse_before = out.heldout_nrmse_after = before.nrmse_heldout;
-  out.cost_after = before.fit;
-  out.heldout_cost_after = before.heldout;
+  out.cost_after = out.cost_before;
+  out.heldout_cost_after = out.heldout_cost_before;
   if (const std::string why = unsupported_reason(effect, base_); !why.empty()) {
     out.note = why;
     out.parameter.value = no_effect_parameter(effect);
@@ -558,13 +680,13 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   if (effect == Effect::sensor_quantization) value = std::max(value, sensors_.resolution_mm);
   out.parameter.value = value;
   const Costs after = costs(best.prediction);
-  out.cost_after = after.fit;
-  out.heldout_cost_after = after.heldout;
+  out.cost_after = balanced(after, false);
+  out.heldout_cost_after = balanced(after, true);
   out.nrmse_after = after.nrmse_fit;
   out.heldout_nrmse_after = after.nrmse_heldout;
-  out.score = before.heldout > 0.0 ? (before.heldout - after.heldout) / before.heldout : 0.0;
+  out.score = out.heldout_cost_before > 0.0 ? (out.heldout_cost_before - out.heldout_cost_after) / out.heldout_cost_before : 0.0;
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
-  out.delta_bic = n_eff * std::log(std::max(after.fit, 1e-300) / std::max(before.fit, 1e-300)) + std::log(n_eff);
+  out.delta_bic = n_eff * std::log(std::max(out.cost_after, 1e-300) / std::max(out.cost_before, 1e-300)) + std::log(n_eff);
   out.material = effect == Effect::sensor_quantization
                      ? value >= std::max(e.material, 2.0 * sensors_.resolution_mm)
                      : is_material(effect, value);
@@ -588,6 +710,13 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
     out.parameter.std = theta_sd * slope;
   }
   out.significant = out.material && out.score >= o_.min_score && -out.delta_bic >= o_.min_bic_gain;
+  if (effect == Effect::sensor_quantization) {
+    // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
+    // the squared-error cost cannot reward this effect. Its evidence is the lattice: the score is
+    // the lattice coherence of the held-out levels at the step fitted on the first part.
+    out.score = out.material ? heldout_coherence(value) : 0.0;
+    out.significant = out.material && out.score >= 0.9;
+  }
   best_[out.name] = std::move(best);
   return out;
 }
@@ -626,6 +755,47 @@ std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets,
 }
 
 }  // namespace
+
+std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
+  std::vector<std::size_t> changes;
+  for (std::size_t k = 1; k < u.size(); ++k) {
+    if (u[k] != u[k - 1]) changes.push_back(k);
+  }
+  if (changes.size() < 8 || t.size() < 2) return {};
+  const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  double d_min = 1e300;
+  for (std::size_t j = 1; j < changes.size(); ++j) d_min = std::min(d_min, t[changes[j]] - t[changes[j - 1]]);
+  // Every grid point must fall in its change interval (t[k-1], t[k]].
+  auto feasible = [&](double period, double phase) {
+    for (std::size_t k : changes) {
+      const double m = std::ceil((t[k - 1] - phase) / period + 1e-12);
+      const double s = phase + m * period;
+      if (!(s > t[k - 1] && s <= t[k] + 1e-12)) return false;
+    }
+    return true;
+  };
+  const std::size_t first = changes.front();
+  double sum_period = 0.0, sum_phase = 0.0;
+  int found = 0;
+  const double period_step = std::max(1e-5, h * 5e-4);
+  for (double period = std::max(0.5 * h, d_min - h); period <= d_min + h; period += period_step) {
+    for (int i = 1; i <= 40; ++i) {
+      const double phase = t[first - 1] + h * i / 40.0;
+      if (feasible(period, phase)) {
+        sum_period += period;
+        sum_phase += phase;
+        ++found;
+      }
+    }
+  }
+  if (found == 0) return {};
+  // The centre of the feasible set.
+  const double period = sum_period / found, phase = sum_phase / found;
+  if (!feasible(period, phase)) return {};
+  std::vector<double> out;
+  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - phase) / period + 1e-12) * period);
+  return out;
+}
 
 std::string DiagnoseOptions::validate() const {
   std::ostringstream out;
@@ -769,8 +939,11 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     if (!d.effects.empty() && d.effects.front().significant) {
       const EffectResult& w = d.effects.front();
       d.verdict = w.name;
-      d.reason = w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
-                 w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
+      d.reason = w.name == "sensor_quantization"
+                     ? "the held-out levels lie on a " + format(w.parameter.value) + " mm lattice (coherence " +
+                           format(std::round(100.0 * w.score) / 100.0) + ")"
+                     : w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
+                           w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
       corrected = engine.best_point(w.name)->prediction;
     } else if (within_noise) {
       d.verdict = "none";

@@ -8,6 +8,8 @@
 //      `fit_fraction` of every recording and judged on the rest. Cost = Σ_channels w_c·MSE_c with
 //      w_c = 1/s_c², s_c the within-recording spread of the channel (floored), so that levels,
 //      gate position and flow all count. Score = relative reduction of the held-out cost.
+//      The score is judged on a channel-balanced cost (mean over channels of MSE_c relative to
+//      the nominal model's), so an effect that explains one channel fully counts.
 //      An effect is *significant* when its score ≥ min_score, its BIC on the fitted part improves
 //      by at least min_bic_gain (with the number of samples corrected for residual correlation),
 //      and its parameter is material (catalog.hpp).
@@ -48,6 +50,10 @@ struct DiagnoseOptions {
   // The recorded command changed somewhere in the sample interval before it shows; the replay
   // switches half a sample earlier so that, on average, it is not late (0 = at the sample).
   double command_lead_samples = 0.5;  // [0, 1]
+  // A clocked command (a PRBS) switches on a grid t0 + m T; when one period and phase are
+  // consistent with every sampled change, the replay switches at the reconstructed instants
+  // instead (command_switch_times), which removes the sampling jitter of the input.
+  bool reconstruct_clock = true;
   double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
   // Leading seconds of every recording left out of costs, tests and location: what happened
   // before the recording started is unknown (the replay settles at the recording's
@@ -75,7 +81,7 @@ struct EffectResult {
   ParameterEstimate parameter;
   double nrmse_before = 0.0, nrmse_after = 0.0;                  // primary, fitted part, mean over recordings
   double heldout_nrmse_before = 0.0, heldout_nrmse_after = 0.0;  // primary, held-out part
-  double cost_before = 0.0, cost_after = 0.0;                    // weighted, fitted part
+  double cost_before = 0.0, cost_after = 0.0;                    // channel-balanced, fitted part
   double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
   double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
   int simulations = 0;           // re-simulations spent on the fit
@@ -105,6 +111,11 @@ struct Diagnosis {
   std::map<std::string, double> channel_scale;  // s_c of the cost weights
   double seconds = 0.0;
 };
+
+// The instants at which a sampled, clocked command changed: if one clock (period T, phase t0)
+// puts a grid point inside every interval (t[k-1], t[k]] where u changes, the grid points;
+// otherwise empty. Periods are searched near the shortest spacing between changes.
+std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u);
 
 // Problems that make recordings unusable with the scenario, one line each naming the recording:
 // sampling period different from the scenario's sensors, missing channels, gate commands or
