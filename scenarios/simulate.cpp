@@ -357,10 +357,6 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
     t_s.push_back(t);
     u_mm.push_back(b.controlled->command(t) / kMm);
     q_lps.push_back(now.discharge / kMm);
-    const auto r = gates::classify_regime(now.upstream_level, now.end_depth, now.opening);
-    regime.push_back(r == gates::GateRegime::submerged || r == gates::GateRegime::closed
-                         ? static_cast<double>(RegimeCode::submerged)
-                         : static_cast<double>(RegimeCode::free));
     if (k % std::max<std::size_t>(1, samples / 100) == 0) {
       report(initial.progress_weight + (1.0 - initial.progress_weight) * t / e.duration_s);
     }
@@ -387,7 +383,22 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.set_column(columns::level_below_gate, in_mm(y_dw.values()));
   rec.set_column(columns::level_downstream_end, in_mm(y_dwe.values()));
   rec.set_column(columns::discharge, q_lps);
+  // The regime by the paper's conditions (8)/(10) and y_lc of eq. (23), from the recorded
+  // (measured) levels and opening, as the paper computed its Figure 6.
+  const auto& dwe = rec.column(columns::level_downstream_end);
+  const auto& xup = rec.column(columns::gate_position);
+  const auto& yup = rec.column(columns::upstream_level);
+  std::vector<double> y_lc(dwe.size());
+  for (std::size_t k = 0; k < dwe.size(); ++k) {
+    // A closed gate has no finite limit; 1e6 mm keeps the file readable (no "inf").
+    y_lc[k] = std::min(gates::limit_condition_level(dwe[k] * kMm, xup[k] * kMm) / kMm, 1e6);
+    const auto r = gates::classify_regime(yup[k] * kMm, dwe[k] * kMm, xup[k] * kMm);
+    regime.push_back(r == gates::GateRegime::submerged || r == gates::GateRegime::closed
+                         ? static_cast<double>(RegimeCode::submerged)
+                         : static_cast<double>(RegimeCode::free));
+  }
   rec.set_column(columns::regime, regime);
+  rec.set_column("y_lc_mm", std::move(y_lc));
   return rec;
 }
 

@@ -29,7 +29,7 @@ TEST(Simulate, LabRecordingHasThePaperFormatAndResolution) {
   const Recording rec = simulate(lab, lab_experiment(25.0, 30.0));
   ASSERT_EQ(rec.size(), 231u);  // 30 s / 0.13 s + 1
   EXPECT_NEAR(rec.sample_period(), 0.13, 1e-12);
-  for (const char* c : {"t_s", "u_mm", "x_up_mm", "y_up_mm", "y_dw_mm", "y_dwe_mm", "q_lps", "regime"}) {
+  for (const char* c : {"t_s", "u_mm", "x_up_mm", "y_up_mm", "y_dw_mm", "y_dwe_mm", "q_lps", "regime", "y_lc_mm"}) {
     EXPECT_TRUE(rec.has(c)) << c;
   }
   for (double y : rec.column("y_dwe_mm")) {
@@ -37,6 +37,11 @@ TEST(Simulate, LabRecordingHasThePaperFormatAndResolution) {
   }
   for (double u : rec.column("u_mm")) EXPECT_TRUE(u == 20.0 || u == 30.0) << "PRBS 25 ± 5 mm";
   EXPECT_NE(rec.meta("initial_state").find("Newton"), std::string::npos);
+  // The regime column is condition (10) on the recorded columns: submerged iff y_up < y_lc.
+  for (std::size_t k = 0; k < rec.size(); ++k) {
+    const bool submerged = rec.column("y_up_mm")[k] <= rec.column("y_lc_mm")[k];
+    EXPECT_EQ(rec.column("regime")[k], submerged ? 1.0 : 0.0) << "sample " << k;
+  }
 }
 
 TEST(Simulate, NewtonInitialStateIsTheOneTimeMarchingReaches) {
