@@ -101,7 +101,8 @@ Claim difference_claim(const std::string& table, const std::string& subject,
                        const std::vector<std::string>& where, const std::vector<double>& paper,
                        const std::vector<double>& here, const std::string& unit) {
   return make_claim(table, subject, where, paper, here, unit, true,
-                    [](double, double h) { return h > 0.0; });
+                    // Positive at the printed precision: a +0.00 tie does not count as beating.
+                    [](double, double h) { return h >= 0.005; });
 }
 
 Claim range_claim(const std::string& table, const std::string& subject, const std::string& range_text,

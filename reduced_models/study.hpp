@@ -52,8 +52,8 @@ struct Claim {
 };
 
 // "SUBJECT at op1 and op2: paper +3.13 and +5.91 UNIT, here +2.10 and −0.40 UNIT — holds." The
-// claim is that every difference is positive; it holds when every `here` difference is > 0
-// (the verdict names the places where it fails). Sizes of `where`, `paper` and `here` must match.
+// claim is that every difference is positive; it holds when every `here` difference is positive
+// at the printed precision (≥ 0.005; the verdict names the places where it fails). Sizes of `where`, `paper` and `here` must match.
 Claim difference_claim(const std::string& table, const std::string& subject,
                        const std::vector<std::string>& where, const std::vector<double>& paper,
                        const std::vector<double>& here, const std::string& unit = "points");

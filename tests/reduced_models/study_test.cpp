@@ -49,6 +49,12 @@ TEST(Claims, ADifferenceClaimDoesNotHoldAndNamesWhereItFails) {
   EXPECT_NE(all.text.find("— does not hold."), std::string::npos) << all.text;
 }
 
+TEST(Claims, ATieAtThePrintedPrecisionIsNotAWin) {
+  const auto c = difference_claim("table3", "NLIOM-S beats LIOM", {"op1"}, {10.26}, {0.001});
+  EXPECT_FALSE(c.holds);
+  EXPECT_NE(c.text.find("here +0.00 points — does not hold."), std::string::npos) << c.text;
+}
+
 TEST(Claims, ARangeClaimChecksEveryValue) {
   EXPECT_TRUE(range_claim("table6", "γ is large", "γ ≥ 3", {"op3", "op4"}, {6.15, 6.85}, {4.0, 3.0}, 3.0, 1e9).holds);
   const auto c = range_claim("table6", "γ is large", "γ ≥ 3", {"op3", "op4"}, {6.15, 6.85}, {1.2, 5.0}, 3.0, 1e9);
