@@ -26,6 +26,7 @@ struct DiagnoseArguments {
   double fit_fraction = 0.5;
   int threads = 2;
   bool recorded_upstream = false;
+  bool no_clock = false;
 };
 
 int run(const DiagnoseArguments& args) {
@@ -50,6 +51,7 @@ int run(const DiagnoseArguments& args) {
   options.fit_fraction = args.fit_fraction;
   options.threads = args.threads;
   options.use_recorded_upstream = args.recorded_upstream;
+  options.reconstruct_clock = !args.no_clock;
   Progress progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + s.name);
   options.progress = [&progress](double f, const std::string&) { progress.update(f); };
   const diagnosis::Diagnosis d = diagnosis::diagnose(s, recordings, options);
@@ -85,6 +87,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "Recordings simulated in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--recorded-upstream", args->recorded_upstream,
                 "Drive the head gate with the recorded y_up_mm instead of the scenario's upstream model");
+  cmd->add_flag("--no-clock", args->no_clock,
+                "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
   cmd->callback([args] {
     const int code = run(*args);
     if (code != 0) throw CLI::RuntimeError(code);

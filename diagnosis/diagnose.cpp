@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <limits>
@@ -269,6 +270,8 @@ void Engine::prepare(const std::vector<Recording>& recordings) {
         }
         p.drive = Recording{};
         p.drive.source = rec.source;
+        p.drive.metadata = rec.metadata;
+        p.drive.set_meta("operating_opening_mm", format(op));
         p.drive.names = {columns::time, columns::gate_command};
         p.drive.columns = {dt, du};
         p.clocked = true;
@@ -765,35 +768,46 @@ std::vector<double> command_switch_times(const std::vector<double>& t, const std
   const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
   double d_min = 1e300;
   for (std::size_t j = 1; j < changes.size(); ++j) d_min = std::min(d_min, t[changes[j]] - t[changes[j - 1]]);
-  // Every grid point must fall in its change interval (t[k-1], t[k]].
+  // Every grid point must fall in its change interval (t[k-1], t[k]], widened by a small
+  // tolerance: a switch exactly at a sample instant (0.5 s clock, 0.13 s samples: every 6.5 s)
+  // may show at that sample or the next, depending on rounding in the recorder.
+  const double tol = 0.03 * h;
   auto feasible = [&](double period, double phase) {
     for (std::size_t k : changes) {
-      const double m = std::ceil((t[k - 1] - phase) / period + 1e-12);
+      const double m = std::ceil((t[k - 1] - tol - phase) / period);
       const double s = phase + m * period;
-      if (!(s > t[k - 1] && s <= t[k] + 1e-12)) return false;
+      if (!(s >= t[k - 1] - tol && s <= t[k] + tol)) return false;
     }
     return true;
   };
   const std::size_t first = changes.front();
-  double sum_period = 0.0, sum_phase = 0.0;
-  int found = 0;
-  const double period_step = std::max(1e-5, h * 5e-4);
+  std::vector<std::pair<double, double>> found;  // feasible (period, phase)
+  // A period error δ moves the m-th grid point by m δ, so the step must be below the tolerance
+  // divided by the number of periods the changes span (~500 for a 255 s PRBS at 0.5 s).
+  const double span = t[changes.back()] - t[changes.front() - 1];
+  const double period_step = std::max(1e-7, 0.5 * tol * std::max(d_min - h, 0.5 * h) / std::max(span, h));
   for (double period = std::max(0.5 * h, d_min - h); period <= d_min + h; period += period_step) {
-    for (int i = 1; i <= 40; ++i) {
-      const double phase = t[first - 1] + h * i / 40.0;
-      if (feasible(period, phase)) {
-        sum_period += period;
-        sum_phase += phase;
-        ++found;
-      }
+    for (int i = 0; i <= 80; ++i) {
+      const double phase = t[first - 1] - tol + (h + 2.0 * tol) * i / 80.0;
+      if (feasible(period, phase)) found.emplace_back(period, phase);
     }
   }
-  if (found == 0) return {};
-  // The centre of the feasible set.
-  const double period = sum_period / found, phase = sum_phase / found;
+  if (found.empty()) return {};
+  // A finer grid can also fit (a few periods shorter than the clock pass by chance); the
+  // longest consistent period is the clock. Its feasible patch is convex: take its centre.
+  const double longest = found.back().first;
+  double sum_period = 0.0, sum_phase = 0.0;
+  int count = 0;
+  for (const auto& [period, phase] : found) {
+    if (longest - period > 1e-3 * longest) continue;
+    sum_period += period;
+    sum_phase += phase;
+    ++count;
+  }
+  const double period = sum_period / count, phase = sum_phase / count;
   if (!feasible(period, phase)) return {};
   std::vector<double> out;
-  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - phase) / period + 1e-12) * period);
+  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
   return out;
 }
 
