@@ -13,15 +13,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct RunResult {
   int status = 0;
   std::string err;
 };
 
-Run run_canalsim(const std::string& arguments, const fs::path& scratch) {
+RunResult run_canalsim(const std::string& arguments, const fs::path& scratch) {
   const fs::path err = scratch / "stderr.txt";
   const std::string command = std::string(CANALSIM_PROGRAM) + " " + arguments + " > /dev/null 2> " + err.string();
-  Run r;
+  RunResult r;
   r.status = std::system(command.c_str());
   std::ifstream in(err);
   std::stringstream text;
@@ -46,7 +46,7 @@ std::size_t count_lines(const std::string& s) {
 TEST(Reproduce, AMissingParentDirectoryIsOneErrorLineAndWritesNothing) {
   const fs::path scratch = scratch_dir("missing");
   const fs::path out = scratch / "no" / "such" / "dir";
-  const Run r = run_canalsim("reproduce --out " + out.string(), scratch);
+  const RunResult r = run_canalsim("reproduce --out " + out.string(), scratch);
   EXPECT_NE(r.status, 0);
   EXPECT_EQ(count_lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
@@ -58,7 +58,7 @@ TEST(Reproduce, AnOutputPathThatIsAFileIsOneErrorLineAndLeavesTheFileAlone) {
   const fs::path scratch = scratch_dir("file");
   const fs::path out = scratch / "taken";
   std::ofstream(out) << "keep me\n";
-  const Run r = run_canalsim("reproduce --out " + out.string(), scratch);
+  const RunResult r = run_canalsim("reproduce --out " + out.string(), scratch);
   EXPECT_NE(r.status, 0);
   EXPECT_EQ(count_lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("not a directory"), std::string::npos) << r.err;
