@@ -76,7 +76,12 @@ void expect_recovered(const Case& c) {
   const EffectResult* e = find(d, c.effect);
   ASSERT_NE(e, nullptr);
   EXPECT_LE(parameter_error({c.effect, c.value}, e->parameter.value), 0.25) << "estimate " << e->parameter.value;
-  EXPECT_GT(e->heldout_nrmse_after, e->heldout_nrmse_before);
+  if (c.effect == "sensor_quantization") {
+    // Judged by the held-out lattice coherence, not by squared error (docs/diagnosis.md).
+    EXPECT_GE(e->score, 0.9);
+  } else {
+    EXPECT_GT(e->heldout_nrmse_after, e->heldout_nrmse_before);
+  }
 }
 
 TEST(Diagnose, CleanRecordingsGiveNone) {
@@ -104,7 +109,7 @@ TEST(Diagnose, ClockedCommandSwitchTimesAreReconstructed) {
   for (int k = 0; k < 800; ++k) {
     t.push_back(0.13 * k);
     const int bit = static_cast<int>(std::floor(0.13 * k / 0.5));
-    u.push_back(((bit * 7919) % 13) % 2 ? 20.0 : 10.0);
+    u.push_back(bit % 3 == 0 ? 20.0 : 10.0);  // runs of one and two clock periods
   }
   const std::vector<double> s = command_switch_times(t, u);
   ASSERT_FALSE(s.empty());
