@@ -286,6 +286,23 @@ double validation_paper(const ValidationTable& v, std::size_t row, const std::st
 
 }  // namespace
 
+// Conclusions of a validation table (5 or 8): the best nominal model per experiment, and whether
+// the nonlinear fractional model beats LFOM.
+void add_validation_claims(const ValidationTable& v, const std::string& model, std::vector<Claim>& claims) {
+  for (std::size_t row = 0; row < v.experiments.size(); ++row) {
+    claims.push_back(same_claim(v.id, "Best nominal model in validation at " + v.experiments[row] +
+                                          " (paper " + v.paper_experiments[row] + ")",
+                                best_model(v, row, true), best_model(v, row, false)));
+  }
+  std::vector<double> p, h;
+  for (std::size_t row = 0; row < v.experiments.size(); ++row) {
+    p.push_back(validation_paper(v, row, model) - validation_paper(v, row, "LFOM"));
+    h.push_back(validation_here(v, row, model) - validation_here(v, row, "LFOM"));
+  }
+  claims.push_back(difference_claim(v.id, "In validation the nominal " + model + " beats the nominal LFOM",
+                                    v.experiments, p, h));
+}
+
 std::vector<Claim> conclusions(const StudyResult& r) {
   std::vector<Claim> claims;
   const auto& liom = find_table(r, ModelKind::liom);
@@ -385,20 +402,7 @@ std::vector<Claim> conclusions(const StudyResult& r) {
   }
 
   // Table 5.
-  for (std::size_t row = 0; row < r.table5.experiments.size(); ++row) {
-    claims.push_back(same_claim("table5", "Best nominal model in validation at " + r.table5.experiments[row] +
-                                              " (paper " + r.table5.paper_experiments[row] + ")",
-                                best_model(r.table5, row, true), best_model(r.table5, row, false)));
-  }
-  {
-    std::vector<double> p, h;
-    for (std::size_t row = 0; row < r.table5.experiments.size(); ++row) {
-      p.push_back(validation_paper(r.table5, row, "NLFOM-S") - validation_paper(r.table5, row, "LFOM"));
-      h.push_back(validation_here(r.table5, row, "NLFOM-S") - validation_here(r.table5, row, "LFOM"));
-    }
-    claims.push_back(difference_claim("table5", "In validation the nominal NLFOM-S beats the nominal LFOM",
-                                      r.table5.experiments, p, h));
-  }
+  add_validation_claims(r.table5, "NLFOM-S", claims);
 
   // Tables 6 and 7.
   claims.push_back(difference_claim("table6", "NLIOM-F beats LIOM (Nrmse)", nliom_f.spec.experiments,
@@ -421,20 +425,7 @@ std::vector<Claim> conclusions(const StudyResult& r) {
                                0.30, true, "mm/mm"));
 
   // Table 8.
-  for (std::size_t row = 0; row < r.table8.experiments.size(); ++row) {
-    claims.push_back(same_claim("table8", "Best nominal model in validation at " + r.table8.experiments[row] +
-                                              " (paper " + r.table8.paper_experiments[row] + ")",
-                                best_model(r.table8, row, true), best_model(r.table8, row, false)));
-  }
-  {
-    std::vector<double> p, h;
-    for (std::size_t row = 0; row < r.table8.experiments.size(); ++row) {
-      p.push_back(validation_paper(r.table8, row, "NLFOM-F") - validation_paper(r.table8, row, "LFOM"));
-      h.push_back(validation_here(r.table8, row, "NLFOM-F") - validation_here(r.table8, row, "LFOM"));
-    }
-    claims.push_back(difference_claim("table8", "In validation the nominal NLFOM-F beats the nominal LFOM",
-                                      r.table8.experiments, p, h));
-  }
+  add_validation_claims(r.table8, "NLFOM-F", claims);
 
   // Figure 6: flow regimes.
   {
