@@ -372,9 +372,15 @@ class Problem {
       double s = name == "L" ? 0.5 * data_.front()->h : std::max(0.1 * std::abs(x[i]), 0.02 * width);
       if (name == "gamma" || name == "gamma_sub") s = 0.2;
       if (name == "lambda") s = 0.05;
-      step[i] = std::min(s * step_scale_, 0.5 * width);
-      if (step[i] <= 0.0) step[i] = 1e-6;
+      s = std::min(s * step_scale_, 0.5 * width);
+      // BOBYQA moves a start that lies closer than one step to a bound (onto the bound or one
+      // step inside it), so the start itself might never be evaluated: keep the step within the
+      // room the start has (a start on a bound is kept as it is).
+      const double room = std::min(x[i] - lo[i], hi[i] - x[i]);
+      if (room > 0.0) s = std::min(s, std::max(room, 1e-3 * width));
+      step[i] = s > 0.0 ? s : 1e-6;
     }
+    evaluate(x);  // the start: the search never returns a model worse than it
     nlopt::algorithm algorithm = nlopt::LN_BOBYQA;
     if (options_.optimizer == Optimizer::sbplx) algorithm = nlopt::LN_SBPLX;
     if (options_.optimizer == Optimizer::nelder_mead) algorithm = nlopt::LN_NELDERMEAD;
@@ -484,71 +490,103 @@ FitResult finish(const Model& model, const std::vector<const ExperimentData*>& d
   return result;
 }
 
-FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& data,
-                   const FitOptions& options) {
-  check_data_for_fit(kind, data, options);
-  int evaluations = 0;
-  int simulations = 0;
+// Stages 1–3 of a fit: the delay grid and refinement of the linear counterpart, then (for a
+// nonlinear model) the coarse scans and refinement of the model itself.
+FitResult fit_from_linear_stage(ModelKind kind, const std::vector<const ExperimentData*>& data,
+                                const FitOptions& options) {
+  double cost = 0.0;
   bool converged = true;
   std::string message;
-  double cost = 0.0;
-  // Stages 1–2 on the linear counterpart. Long records are first fitted on their leading
-  // `coarse_samples` samples; the full record then only polishes that fit.
   const ModelKind linear = linear_counterpart(kind);
-  std::size_t longest = 0;
-  for (const auto* d : data) longest = std::max(longest, d->size());
-  Model linear_fit;
-  if (options.coarse_samples > 0 && longest > 2 * options.coarse_samples) {
-    std::vector<ExperimentData> heads;
-    for (const auto* d : data) heads.push_back(truncated(*d, options.coarse_samples));
-    Problem coarse(linear, pointers(heads), options);
-    const Model grid_start = coarse.delay_grid();
-    // No restart here: the polish on the whole record that follows plays its part.
-    const Model coarse_fit = coarse.refine(grid_start, cost, converged, message, 1.0, 0);
-    evaluations += coarse.evaluations();
-    simulations += coarse.simulations();
-    Problem lin(linear, data, options);
-    linear_fit = lin.refine(coarse_fit, cost, converged, message, 0.1, 0);
-    evaluations += lin.evaluations();
-    simulations += lin.simulations();
-  } else {
-    Problem lin(linear, data, options);
-    const Model grid_start = lin.delay_grid();
-    linear_fit = lin.refine(grid_start, cost, converged, message);
-    evaluations += lin.evaluations();
-    simulations += lin.simulations();
-  }
-  if (linear == kind) {
-    FitResult r = finish(linear_fit, data, options.simulation);
-    r.evaluations = evaluations;
-    r.simulations = simulations;
-    r.converged = converged;
-    r.message = message;
-    return r;
-  }
-  // Stage 3: the nonlinear model from the linear fit.
-  Problem nl(kind, data, options);
-  Model start = nl.base();
-  start.p.T = linear_fit.p.T;
-  start.p.lambda = linear_fit.p.lambda;
-  start.p.L = linear_fit.p.L;
-  for (const auto& name : nl.free_names()) {
-    const auto& spec = options.bounds[name];
-    double value = get_parameter(start.p, name);
-    if (name == "K" || name == "K_sub") value = spec.initial.value_or(linear_fit.p.K);
-    if (name == "gamma" || name == "gamma_sub") value = spec.initial.value_or(0.5);
-    if ((name == "T" || name == "lambda" || name == "L") && spec.initial && !spec.fixed) {
-      value = get_parameter(linear_fit.p, name);
+  Problem lin(linear, data, options);
+  const Model linear_fit = lin.refine(lin.delay_grid(), cost, converged, message);
+  int evaluations = lin.evaluations();
+  int simulations = lin.simulations();
+  Model best = linear_fit;
+  if (linear != kind) {
+    Problem nl(kind, data, options);
+    Model start = nl.base();
+    start.p.T = linear_fit.p.T;
+    start.p.lambda = linear_fit.p.lambda;
+    start.p.L = linear_fit.p.L;
+    for (const auto& name : nl.free_names()) {
+      const auto& spec = options.bounds[name];
+      double value = get_parameter(start.p, name);
+      if (name == "K" || name == "K_sub") value = spec.initial.value_or(linear_fit.p.K);
+      if (name == "gamma" || name == "gamma_sub") value = spec.initial.value_or(0.5);
+      if ((name == "T" || name == "lambda" || name == "L") && spec.initial && !spec.fixed) {
+        value = get_parameter(linear_fit.p, name);
+      }
+      set_parameter(start.p, name, std::clamp(value, spec.lower, spec.upper));
     }
-    set_parameter(start.p, name, std::clamp(value, spec.lower, spec.upper));
+    best = nl.refine(nl.coarse_starts(start), cost, converged, message);
+    evaluations += nl.evaluations();
+    simulations += nl.simulations();
   }
-  start = nl.coarse_starts(start);
-  Model best = nl.refine(start, cost, converged, message);
-  evaluations += nl.evaluations();
-  simulations += nl.simulations();
   FitResult r = finish(best, data, options.simulation);
   r.evaluations = evaluations;
   r.simulations = simulations;
+  r.converged = converged;
+  r.message = message;
+  return r;
+}
+
+// Stages 1–3, and for a fractional model (LFOM, NLFOM-S/F) a second search: the model contains
+// itself at λ = 1, where it is a first-order lag, so it is also fitted with λ fixed at 1 and
+// refined from there with λ free; the better search is kept. The IAE is multimodal in λ (a
+// quantised output makes it piecewise flat), and a search started from the linear fit alone can
+// settle at a λ < 1 that fits worse than λ = 1 — a nested model must not fit worse than the model
+// it contains.
+FitResult fit_searching(ModelKind kind, const std::vector<const ExperimentData*>& data,
+                        const FitOptions& options) {
+  FitResult best = fit_from_linear_stage(kind, data, options);
+  const auto& lambda = options.bounds.lambda;
+  const bool nests_lambda_one = is_fractional(kind) && kind != ModelKind::hybrid && !lambda.fixed &&
+                                lambda.lower <= 1.0 && 1.0 <= lambda.upper;
+  if (!nests_lambda_one) return best;
+  FitOptions at_one_options = options;
+  at_one_options.bounds.lambda = {lambda.lower, lambda.upper, 1.0, true};
+  const FitResult at_one = fit_from_linear_stage(kind, data, at_one_options);
+  Problem problem(kind, data, options);
+  Model current = best.model;
+  const double current_cost = problem.cost(current);
+  double cost = 0.0;
+  bool converged = true;
+  std::string message;
+  const Model refined = problem.refine(at_one.model, cost, converged, message, 0.3, 0);
+  const int evaluations = best.evaluations + at_one.evaluations + problem.evaluations();
+  const int simulations = best.simulations + at_one.simulations + problem.simulations();
+  if (cost < current_cost) {
+    best = finish(refined, data, options.simulation);
+    best.converged = converged;
+    best.message = message;
+  }
+  best.evaluations = evaluations;
+  best.simulations = simulations;
+  return best;
+}
+
+// A fit. Long records are searched on their leading `coarse_samples` samples; the whole record
+// then only polishes that fit (one short local run).
+FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& data,
+                   const FitOptions& options) {
+  check_data_for_fit(kind, data, options);
+  std::size_t longest = 0;
+  for (const auto* d : data) longest = std::max(longest, d->size());
+  if (options.coarse_samples == 0 || longest <= 2 * options.coarse_samples) {
+    return fit_searching(kind, data, options);
+  }
+  std::vector<ExperimentData> heads;
+  for (const auto* d : data) heads.push_back(truncated(*d, options.coarse_samples));
+  const FitResult head_fit = fit_searching(kind, pointers(heads), options);
+  Problem whole(kind, data, options);
+  double cost = 0.0;
+  bool converged = true;
+  std::string message;
+  const Model polished = whole.refine(head_fit.model, cost, converged, message, 0.1, 0);
+  FitResult r = finish(polished, data, options.simulation);
+  r.evaluations = head_fit.evaluations + whole.evaluations();
+  r.simulations = head_fit.simulations + whole.simulations();
   r.converged = converged;
   r.message = message;
   return r;
