@@ -1,15 +1,19 @@
 // `canalsim diagnose --scenario S REC.csv... [--json F] [--report F.html]`: replays each
 // recording's gate command through the scenario, locates where model and recordings disagree,
 // names the missing physics from the catalog, refits it and shows the fit improve
-// (docs/diagnosis.md). Prints a summary; the JSON and HTML are written atomically and only when
+// (docs/diagnosis.md). `canalsim diagnose --model M REC.csv...` does the same for a reduced model
+// (diagnosis/model_diagnosis.hpp). Prints a summary; the JSON and HTML are written atomically and only when
 // the whole diagnosis succeeded.
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "diagnosis/diagnose.hpp"
+#include "diagnosis/model_diagnosis.hpp"
+#include "reduced_models/models.hpp"
 #include "diagnosis/report.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/recording.hpp"
@@ -19,6 +23,10 @@ namespace {
 
 struct DiagnoseArguments {
   std::string scenario;
+  std::string model;
+  double quantum_mm = 0.0;
+  double gate_speed_mm_s = 0.0;
+  std::optional<double> upstream_level_mm;
   std::vector<std::string> recordings;
   std::string json;
   std::string report;
@@ -29,18 +37,64 @@ struct DiagnoseArguments {
   bool no_clock = false;
 };
 
-int run(const DiagnoseArguments& args) {
-  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
-  // Read every recording first and report all that fail, so the user fixes them in one go.
+std::vector<Recording> read_all(const std::vector<std::string>& files, std::string& problems) {
   std::vector<Recording> recordings;
-  std::string problems;
-  for (const auto& file : args.recordings) {
+  for (const auto& file : files) {
     try {
       recordings.push_back(read_recording(file));
     } catch (const InputError& e) {
       problems += std::string(problems.empty() ? "" : "\n") + e.what();
     }
   }
+  return recordings;
+}
+
+int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title) {
+  std::cout << diagnosis::text_summary(d);
+  if (!d.ok) {
+    std::cerr << "canalsim: error: diagnosis failed: " << d.message << '\n';
+    return 1;
+  }
+  if (!args.json.empty()) {
+    write_file_atomically(args.json, diagnosis::to_json(d).dump(2) + "\n");
+    std::cout << "wrote " << args.json << '\n';
+  }
+  if (!args.report.empty()) {
+    write_file_atomically(args.report, diagnosis::html_report(d, title));
+    std::cout << "wrote " << args.report << '\n';
+  }
+  return 0;
+}
+
+int run_model(const DiagnoseArguments& args) {
+  const auto kind = reduced::parse_model_kind(args.model);
+  if (!kind) throw InputError("--model " + args.model + ": expected one of liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid");
+  std::string problems;
+  const std::vector<Recording> recordings = read_all(args.recordings, problems);
+  if (!problems.empty()) throw InputError(problems);
+  diagnosis::ModelDiagnoseOptions options;
+  options.kind = *kind;
+  options.candidates = args.candidates;
+  options.fit_fraction = args.fit_fraction;
+  options.quantum_mm = args.quantum_mm;
+  options.gate_speed_mm_s = args.gate_speed_mm_s;
+  options.data.upstream_level_mm = args.upstream_level_mm;
+  Progress progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + args.model);
+  options.progress = [&progress](double f, const std::string&) { progress.update(f); };
+  const diagnosis::Diagnosis d = diagnosis::diagnose_model(recordings, options);
+  progress.finish();
+  return write_outputs(d, args, "canalsim diagnosis: " + args.model);
+}
+
+int run(const DiagnoseArguments& args) {
+  if (args.scenario.empty() == args.model.empty()) {
+    throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
+  }
+  if (!args.model.empty()) return run_model(args);
+  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  // Read every recording first and report all that fail, so the user fixes them in one go.
+  std::string problems;
+  std::vector<Recording> recordings = read_all(args.recordings, problems);
   for (const auto& p : diagnosis::check_recordings(s, recordings)) {
     problems += std::string(problems.empty() ? "" : "\n") + p;
   }
@@ -56,20 +110,7 @@ int run(const DiagnoseArguments& args) {
   options.progress = [&progress](double f, const std::string&) { progress.update(f); };
   const diagnosis::Diagnosis d = diagnosis::diagnose(s, recordings, options);
   progress.finish();
-  std::cout << diagnosis::text_summary(d);
-  if (!d.ok) {
-    std::cerr << "canalsim: error: diagnosis failed: " << d.message << '\n';
-    return 1;
-  }
-  if (!args.json.empty()) {
-    write_file_atomically(args.json, diagnosis::to_json(d).dump(2) + "\n");
-    std::cout << "wrote " << args.json << '\n';
-  }
-  if (!args.report.empty()) {
-    write_file_atomically(args.report, diagnosis::html_report(d, "canalsim diagnosis: " + s.name));
-    std::cout << "wrote " << args.report << '\n';
-  }
-  return 0;
+  return write_outputs(d, args, "canalsim diagnosis: " + s.name);
 }
 
 }  // namespace
@@ -77,7 +118,15 @@ int run(const DiagnoseArguments& args) {
 void add_diagnose_command(CLI::App& app) {
   auto args = std::make_shared<DiagnoseArguments>();
   auto* cmd = app.add_subcommand("diagnose", "Locate and explain the mismatch between a scenario and recordings");
-  cmd->add_option("--scenario", args->scenario, "Built-in scenario name or TOML file")->required();
+  cmd->add_option("--scenario", args->scenario, "Built-in scenario name or TOML file");
+  cmd->add_option("--model", args->model,
+                  "Diagnose a reduced model instead (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid)");
+  cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm already in the model (eq. 17)")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--gate-speed", args->gate_speed_mm_s, "--model: gate speed in mm/s already in the model (eq. 16)")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--upstream-level", args->upstream_level_mm,
+                  "--model: constant upstream level in mm for recordings without y_up_mm");
   cmd->add_option("recordings", args->recordings, "Recording CSV files")->required();
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");

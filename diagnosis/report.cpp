@@ -179,6 +179,11 @@ std::string text_summary(const Diagnosis& d) {
                 "Nrmse fit", "after", "held-out", "after", "dBIC");
   s << line;
   for (const auto& e : d.effects) {
+    if (e.parameter.name.empty() && !e.note.empty()) {  // not tried: say why instead of zeros
+      s << std::string(e.name) + std::string(e.name.size() < 22 ? 22 - e.name.size() : 0, ' ') << "   -- "
+        << e.note << '\n';
+      continue;
+    }
     const std::string p = fixed(e.parameter.value, 3) + " +- " + fixed(e.parameter.std, 3) + " " + e.parameter.unit;
     std::snprintf(line, sizeof line, "%-22s %7.3f %4s %22s %9.2f %9.2f %9.2f %9.2f %8.0f\n", e.name.c_str(), e.score,
                   e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after, e.heldout_nrmse_before,

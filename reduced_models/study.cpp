@@ -18,10 +18,16 @@ extern const char* const kPaperTablesJson;  // generated from data/paper_tables.
 namespace {
 
 std::string fmt(double v, int digits) {
-  if (!std::isfinite(v)) return v > 0 ? "inf" : (v < 0 ? "-inf" : "nan");
+  if (!std::isfinite(v)) return v > 0 ? "∞" : (v < 0 ? "-∞" : "nan");
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
   return buffer;
+}
+
+// Δp of eq. (22) divides by the nominal parameter: a nominal γ of 0 (the linear form) makes it
+// undefined, which the table says instead of printing a bare infinity.
+std::string uncertainty_cell(double index) {
+  return std::isfinite(index) ? fmt(100.0 * index, 2) : "∞ (nominal 0)";
 }
 
 std::string signed_fmt(double v, int digits) {
@@ -766,7 +772,7 @@ std::string to_markdown(const StudyResult& r) {
     md << "| Δp % |";
     for (const auto& n : names) {
       md << " " << cell(paper_opt("/" + t.spec.paper_key + "/uncertainty_pct/" + n), 2) << " / "
-         << fmt(100.0 * t.uncertainty.at(n), 2) << " |";
+         << uncertainty_cell(t.uncertainty.at(n)) << " |";
     }
     md << " |\n\n";
     if (t.spec.kind == ModelKind::nlfom_s) {

@@ -1,0 +1,625 @@
+#include "diagnosis/model_diagnosis.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <numeric>
+#include <optional>
+#include <sstream>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "diagnosis/catalog.hpp"
+#include "reduced_models/identification.hpp"
+#include "reduced_models/metrics.hpp"
+
+namespace canalsim::diagnosis {
+namespace {
+
+using reduced::ExperimentData;
+using reduced::FitOptions;
+using reduced::Model;
+using reduced::ModelKind;
+
+constexpr const char* kUpstream = "upstream_level_variation";
+constexpr const char* kRegime = "flow_regime_switch";
+constexpr const char* kWave = "wave_resonance";
+
+std::string format(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+// The leading n samples of an experiment (the part the models are fitted on).
+ExperimentData head(const ExperimentData& d, std::size_t n) {
+  ExperimentData h = d;
+  auto cut = [n](std::vector<double>& v) {
+    if (v.size() > n) v.resize(n);
+  };
+  cut(h.t_s);
+  cut(h.u_mm);
+  cut(h.y_dwe_mm);
+  cut(h.y_up_mm);
+  cut(h.x_up_mm);
+  return h;
+}
+
+// Free-flow share of the samples by the paper's condition (8), with the gate position where it
+// was recorded and the command otherwise.
+double free_share(const std::vector<ExperimentData>& data) {
+  std::size_t free = 0, total = 0;
+  for (const auto& d : data) {
+    if (!d.has_upstream_level()) continue;
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      const double x = d.x_up_mm.empty() ? d.u_mm[k] : d.x_up_mm[k];
+      if (x <= 0.0) continue;
+      free += reduced::is_free_flow(d.y_up_mm[k], d.y_dwe_mm[k], x) ? 1 : 0;
+      ++total;
+    }
+  }
+  return total == 0 ? -1.0 : static_cast<double>(free) / static_cast<double>(total);
+}
+
+std::optional<ModelKind> nonlinear_form(ModelKind kind, bool free_flow) {
+  switch (kind) {
+    case ModelKind::liom: return free_flow ? ModelKind::nliom_f : ModelKind::nliom_s;
+    case ModelKind::lfom: return free_flow ? ModelKind::nlfom_f : ModelKind::nlfom_s;
+    default: return std::nullopt;
+  }
+}
+
+// Samples [warm, n_fit) are the fitted part, [n_fit, n) the held-out part of a recording.
+struct Split {
+  std::size_t warm = 0, n_fit = 0, n = 0;
+};
+
+// A model's prediction of the primary channel, per recording (absolute mm).
+using Predictions = std::vector<std::vector<double>>;
+
+struct Scores {
+  double fit_mse = 0.0, heldout_mse = 0.0;
+  double fit_nrmse = 0.0, heldout_nrmse = 0.0;  // mean over recordings, %
+};
+
+class ModelEngine {
+ public:
+  ModelEngine(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& o) : o_(o) {
+    for (const auto& rec : recordings) {
+      data_.push_back(reduced::prepare_data(rec, o.data));
+      if (rec.has(columns::regime)) regime_.push_back(rec.column(columns::regime));
+      else regime_.emplace_back();
+    }
+    for (const auto& d : data_) {
+      Split s;
+      s.n = d.size();
+      s.n_fit = static_cast<std::size_t>(std::round(o.fit_fraction * static_cast<double>(s.n)));
+      s.warm = std::min(s.n_fit / 2, static_cast<std::size_t>(std::ceil(o.warmup_s / d.h - 1e-9)));
+      split_.push_back(s);
+      heads_.push_back(head(d, s.n_fit));
+    }
+    fit_options_.actuation.quantum_mm = o.quantum_mm;
+    fit_options_.actuation.gate_speed_mm_s = o.gate_speed_mm_s;
+    fit_options_.threads = 1;
+  }
+
+  const std::vector<ExperimentData>& data() const { return data_; }
+  const std::vector<std::vector<double>>& regimes() const { return regime_; }
+  const std::vector<Split>& splits() const { return split_; }
+  const Model& nominal() const { return nominal_; }
+  const Predictions& nominal_predictions() const { return nominal_predictions_; }
+
+  void fit_nominal() {
+    nominal_ = reduced::fit_nominal(o_.kind, heads_, fit_options_).model;
+    nominal_predictions_ = predict(nominal_);
+    nominal_scores_ = score(nominal_predictions_);
+  }
+
+  Predictions predict(const Model& m) const {
+    Predictions out;
+    for (const auto& d : data_) out.push_back(reduced::simulate(m, d).y_dwe_mm);
+    return out;
+  }
+
+  Scores score(const Predictions& p) const {
+    Scores s;
+    double fit_sq = 0.0, held_sq = 0.0;
+    std::size_t fit_n = 0, held_n = 0;
+    for (std::size_t i = 0; i < data_.size(); ++i) {
+      const auto& y = data_[i].y_dwe_mm;
+      const auto& sp = split_[i];
+      for (std::size_t k = sp.warm; k < sp.n; ++k) {
+        const double e = y[k] - p[i][k];
+        if (k < sp.n_fit) {
+          fit_sq += e * e;
+          ++fit_n;
+        } else {
+          held_sq += e * e;
+          ++held_n;
+        }
+      }
+      auto part = [](const std::vector<double>& v, std::size_t a, std::size_t b) {
+        return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(a), v.begin() + static_cast<std::ptrdiff_t>(b));
+      };
+      s.fit_nrmse += reduced::nrmse_percent(part(p[i], sp.warm, sp.n_fit), part(y, sp.warm, sp.n_fit));
+      s.heldout_nrmse += reduced::nrmse_percent(part(p[i], sp.n_fit, sp.n), part(y, sp.n_fit, sp.n));
+    }
+    const auto count = static_cast<double>(std::max<std::size_t>(data_.size(), 1));
+    s.fit_mse = fit_sq / static_cast<double>(std::max<std::size_t>(fit_n, 1));
+    s.heldout_mse = held_sq / static_cast<double>(std::max<std::size_t>(held_n, 1));
+    s.fit_nrmse /= count;
+    s.heldout_nrmse /= count;
+    return s;
+  }
+
+  // Effective number of independent samples of the nominal fitted-part residual (for the BIC).
+  double effective_fit_samples() const {
+    double n_eff = 0.0;
+    for (std::size_t i = 0; i < data_.size(); ++i) {
+      const auto& sp = split_[i];
+      std::vector<double> e;
+      for (std::size_t k = sp.warm; k < sp.n_fit; ++k) e.push_back(data_[i].y_dwe_mm[k] - nominal_predictions_[i][k]);
+      n_eff += effective_samples(e);
+    }
+    return std::max(n_eff, 2.0);
+  }
+
+  // Fills the scores of an effect whose corrected predictions are `p` with `extra` parameters.
+  EffectResult judge(const std::string& name, const Predictions& p, int extra, ParameterEstimate parameter,
+                     bool material) const {
+    EffectResult r;
+    r.name = name;
+    r.parameter = std::move(parameter);
+    r.material = material;
+    const Scores after = score(p);
+    r.nrmse_before = nominal_scores_.fit_nrmse;
+    r.nrmse_after = after.fit_nrmse;
+    r.heldout_nrmse_before = nominal_scores_.heldout_nrmse;
+    r.heldout_nrmse_after = after.heldout_nrmse;
+    r.cost_before = nominal_scores_.fit_mse;
+    r.cost_after = after.fit_mse;
+    r.heldout_cost_before = nominal_scores_.heldout_mse;
+    r.heldout_cost_after = after.heldout_mse;
+    r.score = 1.0 - after.heldout_mse / std::max(nominal_scores_.heldout_mse, 1e-300);
+    const double n_eff = effective_fit_samples();
+    r.delta_bic = n_eff * std::log(std::max(after.fit_mse, 1e-300) / std::max(nominal_scores_.fit_mse, 1e-300)) +
+                  extra * std::log(n_eff);
+    r.significant = material && r.score >= o_.min_score && -r.delta_bic >= o_.min_bic_gain;
+    judged_[name] = p;
+    return r;
+  }
+
+  // The corrected predictions of a judged effect.
+  const Predictions& predictions_of(const std::string& name) const { return judged_.at(name); }
+
+  // The nominal model fitted afresh on the fitted parts with other actuation settings (a fresh
+  // search, not a polish of the nominal fit: that fit has absorbed the effect into T and L).
+  Model refit(const reduced::Actuation& actuation) const {
+    FitOptions fo = fit_options_;
+    fo.actuation = actuation;
+    return reduced::fit_nominal(o_.kind, heads_, fo).model;
+  }
+
+  Model fit_kind(ModelKind kind) const { return reduced::fit_nominal(kind, heads_, fit_options_).model; }
+
+  // Δu delayed by the nominal model's L and passed through its actuator: what reaches the pool.
+  std::vector<double> delayed_input(std::size_t i) const {
+    return reduced::delayed_input(data_[i], nominal_.actuation, nominal_.p.L);
+  }
+
+  const ModelDiagnoseOptions& options() const { return o_; }
+
+ private:
+  const ModelDiagnoseOptions& o_;
+  std::vector<ExperimentData> data_, heads_;
+  std::vector<std::vector<double>> regime_;
+  std::vector<Split> split_;
+  FitOptions fit_options_;
+  Model nominal_;
+  Predictions nominal_predictions_;
+  Scores nominal_scores_;
+  mutable std::map<std::string, Predictions> judged_;
+};
+
+// Standard deviation of θ from a parabola through three (θ, MSE) points around the minimum:
+// MSE(θ) ≈ MSE_min + a (θ − θ*)², so var θ ≈ MSE_min / (N_eff a) (Gauss–Newton curvature of a
+// least-squares cost). 0 when the points do not bracket a minimum.
+double parabola_std(double t0, double c0, double t1, double c1, double t2, double c2, double n_eff) {
+  const double d01 = (c1 - c0) / (t1 - t0), d12 = (c2 - c1) / (t2 - t1);
+  const double a = (d12 - d01) / (t2 - t0);
+  if (!(a > 0.0)) return 0.0;
+  return std::sqrt(std::max(std::min({c0, c1, c2}), 1e-300) / (n_eff * a));
+}
+
+EffectResult not_expressible(const std::string& name, const std::string& why) {
+  EffectResult r;
+  r.name = name;
+  r.note = why;
+  r.score = 0.0;
+  return r;
+}
+
+EffectResult gate_rate_limit(const ModelEngine& e) {
+  // θ = 1/v (s/mm): θ = 0 is the ideal gate, and the response is close to linear in θ.
+  const std::vector<double> speeds = {1.0, 1.6, 2.5, 4.0, 6.3, 10.0, 16.0, 25.0, 40.0};
+  std::vector<double> theta, cost;
+  std::vector<Model> models;
+  for (double v : speeds) {
+    reduced::Actuation a = e.nominal().actuation;
+    a.gate_speed_mm_s = v;
+    models.push_back(e.refit(a));
+    theta.push_back(1.0 / v);
+    cost.push_back(e.score(e.predict(models.back())).fit_mse);
+  }
+  const auto best = static_cast<std::size_t>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  double v = speeds[best];
+  Model chosen = models[best];
+  double std_v = 0.0;
+  if (best > 0 && best + 1 < speeds.size()) {
+    // Between grid points: the vertex of the parabola through the best point and its neighbours
+    // (one more refit, kept only if it fits better).
+    const double t0 = theta[best - 1], t1 = theta[best], t2 = theta[best + 1];
+    const double c0 = cost[best - 1], c1 = cost[best], c2 = cost[best + 1];
+    const double num = (t1 - t0) * (t1 - t0) * (c1 - c2) - (t1 - t2) * (t1 - t2) * (c1 - c0);
+    const double den = (t1 - t0) * (c1 - c2) - (t1 - t2) * (c1 - c0);
+    if (den != 0.0) {
+      const double vertex = std::clamp(t1 - 0.5 * num / den, std::min(t0, t2), std::max(t0, t2));
+      reduced::Actuation a = e.nominal().actuation;
+      a.gate_speed_mm_s = 1.0 / vertex;
+      const Model m = e.refit(a);
+      if (e.score(e.predict(m)).fit_mse < c1) {
+        chosen = m;
+        v = a.gate_speed_mm_s;
+      }
+    }
+    const double sd_theta = parabola_std(t0, c0, t1, c1, t2, c2, e.effective_fit_samples());
+    std_v = sd_theta * v * v;  // dv = v² dθ
+  }
+  return e.judge("gate_rate_limit", e.predict(chosen), 1,
+                 {"speed", "mm/s", v, std_v}, is_material(Effect::gate_rate_limit, v));
+}
+
+// The step of the lattice the recorded levels lie on, or 0: the smallest spacing between distinct
+// values that at least 95% of the samples sit on (within a hundredth of it).
+double recorded_lattice(const std::vector<ExperimentData>& data) {
+  std::vector<double> values;
+  for (const auto& d : data) values.insert(values.end(), d.y_dwe_mm.begin(), d.y_dwe_mm.end());
+  std::vector<double> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  if (sorted.size() < 3) return 0.0;
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < sorted.size(); ++i) gaps.push_back(sorted[i] - sorted[i - 1]);
+  std::sort(gaps.begin(), gaps.end());
+  const double step = gaps[gaps.size() / 10];  // a low quantile: robust to a few off-lattice values
+  if (!(step > 1e-9)) return 0.0;
+  std::size_t on = 0;
+  for (double y : values) {
+    const double m = y / step;
+    on += std::abs(m - std::round(m)) < 0.01 ? 1 : 0;
+  }
+  return static_cast<double>(on) >= 0.95 * static_cast<double>(values.size()) ? step : 0.0;
+}
+
+EffectResult sensor_quantization(const ModelEngine& e) {
+  const double r = recorded_lattice(e.data());
+  const double modelled = e.nominal().actuation.quantum_mm;
+  if (r == 0.0) return not_expressible("sensor_quantization", "the recorded levels lie on no lattice");
+  if (r <= 1.5 * modelled) {
+    return not_expressible("sensor_quantization",
+                           "the recorded lattice (" + format(r) + " mm) is the modelled resolution");
+  }
+  reduced::Actuation a = e.nominal().actuation;
+  a.quantum_mm = r;
+  const Model m = e.refit(a);
+  EffectResult res = e.judge("sensor_quantization", e.predict(m), 1, {"resolution", "mm", r, 0.0},
+                             is_material(Effect::sensor_quantization, r));
+  // A lattice is seen directly in the data, not through a better prediction (quantising a model
+  // that is slightly off can move its output to the wrong step): every level on the lattice,
+  // coarser than the modelled resolution, is the evidence.
+  res.score = std::max(res.score, 0.95);
+  res.significant = res.material;
+  return res;
+}
+
+EffectResult upstream_level_variation(const ModelEngine& e) {
+  const ModelKind kind = e.options().kind;
+  for (const auto& d : e.data()) {
+    if (!d.has_upstream_level() || d.y_up_is_constant_option) {
+      return not_expressible(kUpstream, d.source + " has no recorded y_up_mm");
+    }
+  }
+  const double share = free_share(e.data());
+  const auto nl = nonlinear_form(kind, share > 0.5);
+  if (!nl) return not_expressible(kUpstream, "model " + reduced::model_name(kind) + " already uses y_up");
+  Model m = e.fit_kind(*nl);
+  const int extra = static_cast<int>(reduced::parameter_names(*nl).size() - reduced::parameter_names(kind).size());
+  return e.judge(kUpstream, e.predict(m), std::max(extra, 1),
+                 {"gamma", "-", m.p.gamma, 0.0}, std::abs(m.p.gamma) >= 0.1);
+}
+
+EffectResult flow_regime_switch(const ModelEngine& e) {
+  const ModelKind kind = e.options().kind;
+  if (kind == ModelKind::hybrid) return not_expressible(kRegime, "the hybrid model already switches");
+  for (const auto& d : e.data()) {
+    if (!d.has_upstream_level()) return not_expressible(kRegime, d.source + " has no y_up_mm for conditions (8)/(10)");
+  }
+  const double share = free_share(e.data());
+  if (share < 0.05 || share > 0.95) {
+    return not_expressible(kRegime, "the recordings stay in one regime (free flow in " +
+                                        format(std::round(100.0 * share)) + "% of the samples)");
+  }
+  Model m = e.fit_kind(ModelKind::hybrid);
+  const int extra = static_cast<int>(reduced::parameter_names(ModelKind::hybrid).size() -
+                                     reduced::parameter_names(kind).size());
+  const double k = m.p.K == 0.0 ? 1.0 : m.p.K;
+  const bool material = std::abs(m.p.K_sub / k - 1.0) >= 0.1 || std::abs(m.p.gamma_sub - m.p.gamma) >= 0.1;
+  return e.judge(kRegime, e.predict(m), std::max(extra, 1), {"K_sub", "mm/mm", m.p.K_sub, 0.0}, material);
+}
+
+// Least-squares fit of residual ≈ a z1 + b z2 over the fitted parts; returns (a, b, mse).
+struct ModeFit {
+  double a = 0.0, b = 0.0, mse = 0.0;
+};
+
+EffectResult wave_resonance(const ModelEngine& e) {
+  const auto& data = e.data();
+  const auto& splits = e.splits();
+  const auto& nominal = e.nominal_predictions();
+  std::vector<std::vector<double>> inputs, residuals;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    inputs.push_back(e.delayed_input(i));
+    std::vector<double> r(data[i].size());
+    for (std::size_t k = 0; k < r.size(); ++k) r[k] = data[i].y_dwe_mm[k] - nominal[i][k];
+    residuals.push_back(std::move(r));
+  }
+  const double h = data.front().h;
+  const double f_low = 0.01, f_high = std::min(1.0, 0.25 / h);
+  const std::vector<double> dampings = {0.02, 0.05, 0.1, 0.2};
+  constexpr int kFrequencies = 60;
+  struct Best {
+    double f = 0, zeta = 0, mse = std::numeric_limits<double>::infinity(), a = 0, b = 0;
+  } best;
+  std::vector<double> profile_f, profile_mse;  // best MSE per frequency (over damping)
+  auto regressors = [&](std::size_t i, double f, double zeta) {
+    const auto mode = damped_mode_response(inputs[i], data[i].h, f, zeta);
+    std::vector<double> high(mode.low_pass.size());
+    for (std::size_t k = 0; k < high.size(); ++k) high[k] = mode.low_pass[k] - inputs[i][k];
+    return std::make_pair(mode.band_pass, high);  // zero static gain: the nominal gain stays
+  };
+  for (int j = 0; j < kFrequencies; ++j) {
+    const double f = f_low * std::pow(f_high / f_low, static_cast<double>(j) / (kFrequencies - 1));
+    double best_here = std::numeric_limits<double>::infinity();
+    for (double zeta : dampings) {
+      Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+      double rr = 0.0;
+      std::size_t n = 0;
+      std::vector<std::pair<std::vector<double>, std::vector<double>>> z;
+      for (std::size_t i = 0; i < data.size(); ++i) {
+        z.push_back(regressors(i, f, zeta));
+        for (std::size_t k = splits[i].warm; k < splits[i].n_fit; ++k) {
+          const Eigen::Vector2d x(z[i].first[k], z[i].second[k]);
+          A += x * x.transpose();
+          rhs += x * residuals[i][k];
+          rr += residuals[i][k] * residuals[i][k];
+          ++n;
+        }
+      }
+      if (n == 0 || std::abs(A.determinant()) < 1e-300) continue;
+      const Eigen::Vector2d ab = A.ldlt().solve(rhs);
+      const double mse = (rr - ab.dot(rhs)) / static_cast<double>(n);
+      best_here = std::min(best_here, mse);
+      if (mse < best.mse) best = {f, zeta, mse, ab[0], ab[1]};
+    }
+    profile_f.push_back(f);
+    profile_mse.push_back(best_here);
+  }
+  if (!std::isfinite(best.mse)) return not_expressible(kWave, "no mode could be fitted");
+  Predictions corrected = nominal;
+  double contribution_sq = 0.0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    const auto [bp, hp] = regressors(i, best.f, best.zeta);
+    for (std::size_t k = 0; k < corrected[i].size(); ++k) {
+      const double add = best.a * bp[k] + best.b * hp[k];
+      corrected[i][k] += add;
+      if (k >= splits[i].warm && k < splits[i].n_fit) {
+        contribution_sq += add * add;
+        ++count;
+      }
+    }
+  }
+  const auto at = static_cast<std::size_t>(std::find(profile_f.begin(), profile_f.end(), best.f) - profile_f.begin());
+  double std_f = 0.0;
+  if (at > 0 && at + 1 < profile_f.size()) {
+    const double sd_log = parabola_std(std::log(profile_f[at - 1]), profile_mse[at - 1], std::log(profile_f[at]),
+                                       profile_mse[at], std::log(profile_f[at + 1]), profile_mse[at + 1],
+                                       e.effective_fit_samples());
+    std_f = sd_log * best.f;
+  }
+  // Material: the mode moves the level by more than a sensor step (0.05 mm) on average.
+  const double rms = std::sqrt(contribution_sq / static_cast<double>(std::max<std::size_t>(count, 1)));
+  return e.judge(kWave, corrected, 4, {"frequency", "Hz", best.f, std_f}, rms >= 0.05);
+}
+
+EffectResult evaluate(const std::string& name, const ModelEngine& e) {
+  if (name == "gate_rate_limit") return gate_rate_limit(e);
+  if (name == "sensor_quantization") return sensor_quantization(e);
+  if (name == kUpstream) return upstream_level_variation(e);
+  if (name == kRegime) return flow_regime_switch(e);
+  if (name == kWave) return wave_resonance(e);
+  const std::string absorbed = name == "sensor_delay"    ? "the delay L"
+                               : name == "sensor_offset" ? "the operating point y0"
+                                                         : "the gain and time constant";
+  return not_expressible(name, "a reduced model absorbs it into " + absorbed + " (not identifiable)");
+}
+
+std::vector<RecordingResiduals> residual_sets(const ModelEngine& e, const Predictions& p) {
+  std::vector<RecordingResiduals> out;
+  for (std::size_t i = 0; i < e.data().size(); ++i) {
+    const auto& d = e.data()[i];
+    const std::size_t warm = e.splits()[i].warm;
+    auto tail = [warm](const std::vector<double>& v) {
+      return v.empty() ? v : std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(warm), v.end());
+    };
+    RecordingResiduals r;
+    r.name = d.source;
+    r.operating_point_mm = d.u0_mm;
+    r.period_s = d.h;
+    r.t = tail(d.t_s);
+    for (double& t : r.t) t -= d.t_s.front();
+    r.u = tail(d.u_mm);
+    r.level = tail(d.y_dwe_mm);
+    r.regime = tail(e.regimes()[i]);
+    r.primary = columns::level_downstream_end;
+    std::vector<double> res(r.level.size());
+    const auto model = tail(p[i]);
+    for (std::size_t k = 0; k < res.size(); ++k) res[k] = r.level[k] - model[k];
+    r.residuals[r.primary] = std::move(res);
+    r.nrmse_percent = reduced::nrmse_percent(model, r.level);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> model_effect_names() {
+  std::vector<std::string> names;
+  for (const auto& e : catalog()) names.emplace_back(e.name);
+  names.emplace_back(kUpstream);
+  names.emplace_back(kRegime);
+  names.emplace_back(kWave);
+  return names;
+}
+
+std::string ModelDiagnoseOptions::validate() const {
+  std::ostringstream out;
+  if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected in (0.1, 0.9)";
+  else if (!(min_score > 0.0 && min_score < 1.0)) out << "min_score = " << min_score << ": expected in (0, 1)";
+  else if (!(min_bic_gain >= 0.0)) out << "min_bic_gain = " << min_bic_gain << ": expected >= 0";
+  else if (!(none_noise_factor > 0.0)) out << "none_noise_factor = " << none_noise_factor << ": expected > 0";
+  else if (!(warmup_s >= 0.0)) out << "warmup_s = " << warmup_s << ": expected >= 0";
+  else if (!(quantum_mm >= 0.0)) out << "quantum_mm = " << quantum_mm << ": expected >= 0";
+  else if (!(gate_speed_mm_s >= 0.0)) out << "gate_speed_mm_s = " << gate_speed_mm_s << ": expected >= 0";
+  else if (const auto why = tests.validate(); !why.empty()) out << "tests." << why;
+  else if (const auto why2 = locate.validate(); !why2.empty()) out << "locate." << why2;
+  else {
+    const auto known = model_effect_names();
+    for (const auto& c : candidates) {
+      if (std::find(known.begin(), known.end(), c) == known.end()) {
+        out << "candidates: unknown effect '" << c << "'";
+        break;
+      }
+    }
+  }
+  return out.str();
+}
+
+ModeResponse damped_mode_response(const std::vector<double>& x, double h, double frequency_hz, double damping) {
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  // Augmented exponential exp([[A, B], [0, 0]] h) gives Φ = e^{Ah} and Γ = ∫₀ʰ e^{Aτ} dτ B.
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  M(0, 1) = 1.0;
+  M(1, 0) = -w * w;
+  M(1, 1) = -2.0 * damping * w;
+  M(1, 2) = w * w;
+  const Eigen::Matrix3d E = (M * h).exp();
+  const Eigen::Matrix2d Phi = E.topLeftCorner<2, 2>();
+  const Eigen::Vector2d Gamma = E.topRightCorner<2, 1>();
+  ModeResponse r;
+  r.low_pass.resize(x.size());
+  r.band_pass.resize(x.size());
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    r.low_pass[k] = s[0];
+    r.band_pass[k] = 2.0 * damping / w * s[1];
+    s = Phi * s + Gamma * x[k];
+  }
+  return r;
+}
+
+Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& options) {
+  if (const auto why = options.validate(); !why.empty()) throw InputError("diagnose --model: " + why);
+  if (recordings.empty()) throw InputError("diagnose --model: no recordings");
+  const auto started = std::chrono::steady_clock::now();
+  std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
+  auto progress = [&](double f, const std::string& what) {
+    if (options.progress) options.progress(f, what);
+  };
+  Diagnosis d;
+  ModelEngine engine(recordings, options);  // throws InputError naming a recording it cannot use
+  try {
+    progress(0.0, "nominal " + reduced::model_name(options.kind));
+    engine.fit_nominal();
+    const auto before = residual_sets(engine, engine.nominal_predictions());
+    d.mismatch = locate(before, options.locate);
+    for (const auto& r : before) d.tests_before.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
+    double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
+    std::size_t n = 0;
+    for (const auto& r : before) {
+      const double sigma = noise_level(r.level, options.quantum_mm);
+      noise_sq += sigma * sigma;
+      const auto& e = r.residuals.at(r.primary);
+      rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
+      n += e.size();
+      const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
+      double v = 0.0;
+      for (double y : r.level) v += (y - mean) * (y - mean);
+      spread_sq += v / static_cast<double>(r.level.size());
+    }
+    const auto count = static_cast<double>(before.size());
+    d.noise = std::sqrt(noise_sq / count);
+    d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
+    d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
+
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      progress(0.1 + 0.85 * static_cast<double>(i) / static_cast<double>(candidates.size()), candidates[i]);
+      d.effects.push_back(evaluate(candidates[i], engine));
+    }
+    std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
+      if (a.significant != b.significant) return a.significant;
+      if (a.note.empty() != b.note.empty()) return a.note.empty();
+      return a.score > b.score;
+    });
+    const bool within_noise = d.nominal_rms <= options.none_noise_factor * d.noise;
+    Predictions corrected = engine.nominal_predictions();
+    if (!d.effects.empty() && d.effects.front().significant) {
+      const EffectResult& w = d.effects.front();
+      d.verdict = w.name;
+      d.reason = w.name + " reduces the held-out squared residual by " + format(std::round(100.0 * w.score)) +
+                 "% (" + w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
+      corrected = engine.predictions_of(w.name);
+    } else if (within_noise) {
+      d.verdict = "none";
+      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
+                 format(d.noise) + " mm) and no candidate improves the held-out fit";
+    } else {
+      d.verdict = "unexplained";
+      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " +
+                 format(options.none_noise_factor) + " x the noise (" + format(d.noise) +
+                 " mm) and no candidate improves the held-out fit significantly";
+    }
+    const auto after = residual_sets(engine, corrected);
+    d.mismatch_after = locate(after, options.locate);
+    for (const auto& r : after) d.tests_after.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
+    for (std::size_t i = 0; i < engine.data().size(); ++i) {
+      const auto& data = engine.data()[i];
+      d.series.push_back(RecordingSeries{data.source, data.t_s, data.u_mm, data.y_dwe_mm,
+                                         engine.nominal_predictions()[i], corrected[i], engine.splits()[i].n_fit});
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    d.ok = false;
+    d.message = e.what();
+  }
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  progress(1.0, "done");
+  return d;
+}
+
+}  // namespace canalsim::diagnosis
