@@ -73,7 +73,16 @@ struct SensorModel {
   double resolution_mm = 0.0;
   double delay_s = 0.0;
   double offset_mm = 0.0;
+  // Spread σ of (true level − model level), or 0. With a resolution r > 0, a prediction of the
+  // reading is then its expectation E[Q(y + ε)], ε ~ N(0, σ²), instead of Q(y): when the model is
+  // off by a fraction of a step, rounding it can pick the wrong step, while the expectation is
+  // the mean-square-best prediction of a quantised reading at every σ (σ → 0 gives Q(y),
+  // σ ≫ r gives y).
+  double reading_spread_mm = 0.0;
 };
+
+// E[Q(y + ε)] for Q(v) = r·nint(v/r) and ε ~ N(0, σ²): Σ_m m r P(the reading is m r).
+double expected_reading(double y, double resolution, double spread);
 SensorModel sensor_model_of(const scenarios::SensorSpec& sensors);
 
 // Applies a hydraulic effect to a scenario. `inflow_m3s` is the recording's nominal inflow, the

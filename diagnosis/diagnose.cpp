@@ -106,7 +106,9 @@ Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
     }
     std::vector<double> v(y.size());
     for (std::size_t k = 0; k < y.size(); ++k) {
-      v[k] = quantise_mm(at_fractional(y, static_cast<double>(k) - shift) + m.offset_mm, m.resolution_mm);
+      const double level = at_fractional(y, static_cast<double>(k) - shift) + m.offset_mm;
+      v[k] = m.reading_spread_mm > 0.0 ? expected_reading(level, m.resolution_mm, m.reading_spread_mm)
+                                       : quantise_mm(level, m.resolution_mm);
     }
     out[name] = std::move(v);
   }
@@ -187,6 +189,7 @@ class Engine {
   Point secant_fit(Effect effect, const Point& start, int& sims);
   Point rate_limit_from_position(int& sims);
   double lattice_resolution() const;
+  double reading_spread(double resolution) const;
   double heldout_coherence(double r) const;
   double correlation_inflation() const { return inflation_; }
 
@@ -436,13 +439,34 @@ void Engine::simulate_nominal() {
   inflation_ = std::max(1.0, n / std::max(n_eff, 1.0));
 }
 
+// σ of (true level − model level) for the expected reading of a sensor with resolution r: the
+// nominal primary residual on the fitted part less the quantisation variance r²/12 it contains,
+// at least a tenth of a step.
+double Engine::reading_spread(double r) const {
+  double sq = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const auto& y = recs_[i].data.at(o_.primary);
+    const auto& m = nominal_[i].at(o_.primary);
+    for (std::size_t k = 0; k < recs_[i].n_fit; ++k) {
+      sq += (y[k] - m[k]) * (y[k] - m[k]);
+      ++n;
+    }
+  }
+  const double mse = sq / static_cast<double>(std::max<std::size_t>(n, 1));
+  return std::sqrt(std::max(mse - r * r / 12.0, 0.01 * r * r));
+}
+
 std::vector<Channels> Engine::predict(Effect effect, double theta) {
   const double parameter = to_parameter(effect, theta);
   std::vector<Channels> out(recs_.size());
   if (info(effect).sensor_only) {
     SensorModel m = sensors_;
     apply_effect(effect, parameter, m);
-    if (effect == Effect::sensor_quantization) m.resolution_mm = std::max(parameter, sensors_.resolution_mm);
+    if (effect == Effect::sensor_quantization) {
+      m.resolution_mm = std::max(parameter, sensors_.resolution_mm);
+      m.reading_spread_mm = reading_spread(m.resolution_mm);
+    }
     for (std::size_t i = 0; i < recs_.size(); ++i) out[i] = observe(truth_[i], m, period_);
     return out;
   }

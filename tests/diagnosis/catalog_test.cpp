@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 #include "scenarios/builtin.hpp"
@@ -79,6 +80,37 @@ TEST(Catalog, EffectsAScenarioCannotCarryAreNamed) {
   EXPECT_THROW(apply_effect(Effect::gate_leakage, 1.0, s, 0.0), std::invalid_argument);
   s.downstream.kind = scenarios::DownstreamKind::weir;
   EXPECT_FALSE(unsupported_reason(Effect::downstream_gate, s).empty());
+}
+
+TEST(ExpectedReading, IsRoundingWithoutSpreadAndTheLevelItselfForALargeSpread) {
+  EXPECT_DOUBLE_EQ(expected_reading(0.74, 0.5, 0.0), 0.5);
+  EXPECT_DOUBLE_EQ(expected_reading(0.76, 0.5, 0.0), 1.0);
+  EXPECT_NEAR(expected_reading(0.63, 0.5, 2.0), 0.63, 1e-9);
+  // Symmetric about a lattice point and about the midpoint between two.
+  EXPECT_NEAR(expected_reading(1.0, 0.5, 0.1), 1.0, 1e-12);
+  EXPECT_NEAR(expected_reading(1.25, 0.5, 0.1), 1.25, 1e-12);
+}
+
+// Monte Carlo: for a model that is off by a Gaussian error of spread σ, the expected reading
+// predicts the quantised readings better in mean square than either rounding the model level or
+// the level itself (the property the diagnosis relies on for sensor_quantization).
+TEST(ExpectedReading, PredictsQuantisedReadingsBetterThanRoundingOrTheRawLevel) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> level(40.0, 60.0);
+  for (double sigma : {0.05, 0.15, 0.3}) {
+    std::normal_distribution<double> error(0.0, sigma);
+    const double r = 0.5;
+    double se_expected = 0.0, se_round = 0.0, se_raw = 0.0;
+    for (int i = 0; i < 20000; ++i) {
+      const double model = level(rng);
+      const double reading = r * std::round((model + error(rng)) / r);
+      se_expected += std::pow(reading - expected_reading(model, r, sigma), 2);
+      se_round += std::pow(reading - r * std::round(model / r), 2);
+      se_raw += std::pow(reading - model, 2);
+    }
+    EXPECT_LT(se_expected, se_round) << "sigma " << sigma;
+    EXPECT_LT(se_expected, se_raw) << "sigma " << sigma;
+  }
 }
 
 }  // namespace
