@@ -905,6 +905,52 @@ std::vector<std::string> check_recordings(const Scenario& s, const std::vector<R
   return problems;
 }
 
+void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d) {
+  double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
+  std::size_t n = 0;
+  for (const auto& r : sets) {
+    const double sigma = noise_level(r.level, resolution);
+    noise_sq += sigma * sigma;
+    const auto& e = r.residuals.at(r.primary);
+    rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
+    n += e.size();
+    const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
+    double v = 0.0;
+    for (double y : r.level) v += (y - mean) * (y - mean);
+    spread_sq += v / static_cast<double>(r.level.size());
+  }
+  const auto count = static_cast<double>(std::max<std::size_t>(sets.size(), 1));
+  d.noise = std::sqrt(noise_sq / count);
+  d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
+  d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
+}
+
+bool set_verdict(Diagnosis& d, double none_noise_factor) {
+  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise ||
+                            std::all_of(d.tests_before.begin(), d.tests_before.end(),
+                                        [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
+  if (!d.effects.empty() && d.effects.front().significant) {
+    const EffectResult& w = d.effects.front();
+    d.verdict = w.name;
+    d.reason = w.name == "sensor_quantization"
+                   ? "the held-out levels lie on a " + format(w.parameter.value) + " mm lattice (coherence " +
+                         format(std::round(100.0 * w.score) / 100.0) + ")"
+                   : w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
+                         w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
+    return true;
+  }
+  if (within_noise) {
+    d.verdict = "none";
+    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
+               format(d.noise) + " mm) and no candidate improves the held-out fit";
+  } else {
+    d.verdict = "unexplained";
+    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " + format(none_noise_factor) +
+               " x the noise (" + format(d.noise) + " mm) and no candidate improves the held-out fit significantly";
+  }
+  return false;
+}
+
 Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
   if (const std::string problem = options.validate(); !problem.empty()) throw InputError("diagnose options: " + problem);
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
@@ -943,24 +989,7 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     d.mismatch = locate(before_sets, options.locate);
     d.tests_before = tests_of(before_sets, options.tests);
     d.channel_scale = engine.scale();
-    // Noise of the primary channel from the recordings themselves.
-    double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
-    std::size_t n = 0;
-    for (const auto& r : before_sets) {
-      const double sigma = noise_level(r.level, engine.base_resolution());
-      noise_sq += sigma * sigma;
-      const auto& e = r.residuals.at(r.primary);
-      rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
-      n += e.size();
-      const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
-      double v = 0.0;
-      for (double y : r.level) v += (y - mean) * (y - mean);
-      spread_sq += v / static_cast<double>(r.level.size());
-    }
-    const auto count = static_cast<double>(std::max<std::size_t>(before_sets.size(), 1));
-    d.noise = std::sqrt(noise_sq / count);
-    d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
-    d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
+    set_noise_figures(before_sets, engine.base_resolution(), d);
 
     for (Effect effect : candidates) {
       stage = info(effect).name;
@@ -970,29 +999,8 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
       if (a.significant != b.significant) return a.significant;
       return a.score > b.score;
     });
-    const bool within_noise = d.nominal_rms <= options.none_noise_factor * d.noise ||
-                              std::all_of(d.tests_before.begin(), d.tests_before.end(),
-                                          [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
     std::vector<Channels> corrected = engine.nominal();
-    if (!d.effects.empty() && d.effects.front().significant) {
-      const EffectResult& w = d.effects.front();
-      d.verdict = w.name;
-      d.reason = w.name == "sensor_quantization"
-                     ? "the held-out levels lie on a " + format(w.parameter.value) + " mm lattice (coherence " +
-                           format(std::round(100.0 * w.score) / 100.0) + ")"
-                     : w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
-                           w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
-      corrected = engine.best_point(w.name)->prediction;
-    } else if (within_noise) {
-      d.verdict = "none";
-      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
-                 format(d.noise) + " mm) and no candidate improves the held-out fit";
-    } else {
-      d.verdict = "unexplained";
-      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " +
-                 format(options.none_noise_factor) + " x the noise (" + format(d.noise) +
-                 " mm) and no catalog effect improves the held-out fit significantly";
-    }
+    if (set_verdict(d, options.none_noise_factor)) corrected = engine.best_point(d.verdict)->prediction;
     const auto after_sets = residual_sets(engine.recordings(), corrected, options.primary, engine.period());
     d.mismatch_after = locate(after_sets, options.locate);
     d.tests_after = tests_of(after_sets, options.tests);

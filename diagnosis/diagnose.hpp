@@ -123,6 +123,15 @@ std::vector<double> command_switch_times(const std::vector<double>& t, const std
 std::vector<std::string> check_recordings(const scenarios::Scenario& scenario,
                                           const std::vector<Recording>& recordings);
 
+// Noise of the primary channel estimated from the recordings themselves, the nominal residual RMS
+// and the Nrmse a perfect model would reach given that noise (fields of `d`).
+void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d);
+
+// Verdict and reason from the ranked effects and the nominal residual tests: the first effect
+// when it is significant (returns true); else `none` when the nominal residual is within
+// none_noise_factor × the noise or passes the residual tests; else `unexplained`.
+bool set_verdict(Diagnosis& d, double none_noise_factor);
+
 // Runs the diagnosis. Throws InputError (all problems of check_recordings, or invalid options);
 // a simulation failure is returned as ok = false with the message.
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,

@@ -558,23 +558,7 @@ Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDi
     const auto before = residual_sets(engine, engine.nominal_predictions());
     d.mismatch = locate(before, options.locate);
     for (const auto& r : before) d.tests_before.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
-    double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
-    std::size_t n = 0;
-    for (const auto& r : before) {
-      const double sigma = noise_level(r.level, options.quantum_mm);
-      noise_sq += sigma * sigma;
-      const auto& e = r.residuals.at(r.primary);
-      rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
-      n += e.size();
-      const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
-      double v = 0.0;
-      for (double y : r.level) v += (y - mean) * (y - mean);
-      spread_sq += v / static_cast<double>(r.level.size());
-    }
-    const auto count = static_cast<double>(before.size());
-    d.noise = std::sqrt(noise_sq / count);
-    d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
-    d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
+    set_noise_figures(before, options.quantum_mm, d);
 
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       progress(0.1 + 0.85 * static_cast<double>(i) / static_cast<double>(candidates.size()), candidates[i]);
@@ -585,24 +569,8 @@ Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDi
       if (a.note.empty() != b.note.empty()) return a.note.empty();
       return a.score > b.score;
     });
-    const bool within_noise = d.nominal_rms <= options.none_noise_factor * d.noise;
     Predictions corrected = engine.nominal_predictions();
-    if (!d.effects.empty() && d.effects.front().significant) {
-      const EffectResult& w = d.effects.front();
-      d.verdict = w.name;
-      d.reason = w.name + " reduces the held-out squared residual by " + format(std::round(100.0 * w.score)) +
-                 "% (" + w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
-      corrected = engine.predictions_of(w.name);
-    } else if (within_noise) {
-      d.verdict = "none";
-      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
-                 format(d.noise) + " mm) and no candidate improves the held-out fit";
-    } else {
-      d.verdict = "unexplained";
-      d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " +
-                 format(options.none_noise_factor) + " x the noise (" + format(d.noise) +
-                 " mm) and no candidate improves the held-out fit significantly";
-    }
+    if (set_verdict(d, options.none_noise_factor)) corrected = engine.predictions_of(d.verdict);
     const auto after = residual_sets(engine, corrected);
     d.mismatch_after = locate(after, options.locate);
     for (const auto& r : after) d.tests_after.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
