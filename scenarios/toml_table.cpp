@@ -60,6 +60,11 @@ void TomlTable::fail(const std::string& key, const std::string& what) const {
 
 bool TomlTable::has(const std::string& key) const { return table_.contains(key); }
 
+bool TomlTable::is_string(const std::string& key) const {
+  const toml::node* node = table_.get(key);
+  return node && node->is_string();
+}
+
 const toml::node* TomlTable::find(const std::string& key) {
   used_.insert(key);
   return table_.get(key);

@@ -37,6 +37,7 @@ class TomlTable {
   std::string choice(const std::string& key, const std::string& fallback,
                      std::initializer_list<const char*> allowed);
   bool has(const std::string& key) const;
+  bool is_string(const std::string& key) const;  // present and a string
   TomlTable table(const std::string& key);
   // An array of tables ([[key]]); empty when absent.
   std::vector<TomlTable> tables(const std::string& key);
