@@ -35,7 +35,7 @@ bool needs_design(const Scenario& s) {
   bool any = s.head_gate && s.head_gate->auto_opening;
   for (const auto& g : s.gates) any = any || g.auto_opening;
   for (const auto& p : s.pools) {
-    for (const auto& o : p.offtakes) any = any || o.kind == OfftakeKind::orifice;
+    for (const auto& o : p.offtakes) any = any || (o.kind == OfftakeKind::orifice && o.coefficient <= 0.0);
   }
   return any;
 }
@@ -180,7 +180,7 @@ Scenario resolve_design(const Scenario& in) {
     }
     for (std::size_t k = 0; k < p.offtakes.size(); ++k) {
       OfftakeSpec& o = p.offtakes[k];
-      if (o.kind != OfftakeKind::orifice) continue;
+      if (o.kind != OfftakeKind::orifice || o.coefficient > 0.0) continue;  // fixed, or already sized
       const double head = p.design_depth_m[static_cast<std::size_t>(offtake_cell(p, o.x_m))] - o.invert_m;
       if (!(head > 0.0)) {
         throw InputError(s.source + ": pools[" + std::to_string(i) + "].offtakes[" + std::to_string(k) +
@@ -191,6 +191,7 @@ Scenario resolve_design(const Scenario& in) {
   }
   if (s.head_gate && s.head_gate->auto_opening) {
     GateSpec& g = *s.head_gate;
+    g.auto_opening = false;
     try {
       g.opening_m = gate_opening_for(gate_geometry(g), flows[0].inflow, s.upstream.level_m, start_depth[0],
                                      g.max_opening_m);
@@ -201,6 +202,7 @@ Scenario resolve_design(const Scenario& in) {
   for (std::size_t i = 0; i < s.gates.size(); ++i) {
     GateSpec& g = s.gates[i];
     if (!g.auto_opening) continue;
+    g.auto_opening = false;  // resolved: the copy has a number
     const PoolSpec &up = s.pools[i], &down = s.pools[i + 1];
     const double z_up = cell_bed_elevation(up, up.cells - 1), z_down = cell_bed_elevation(down, 0);
     const double sill = std::max(z_up, z_down);

@@ -68,8 +68,9 @@ BackwaterProfile backwater_profile(const PoolSpec& pool, double inflow, double e
 double gate_opening_for(const gates::GateGeometry& gate, double discharge, double y1, double y3,
                         double max_opening);
 
-// A copy of the scenario with automatic openings, orifice coefficients and design profiles
-// filled in (the scenario itself when it has none of them). Throws InputError naming the key.
+// A copy of the scenario with automatic openings (auto_opening cleared), the coefficients of
+// orifices that have none, and design profiles filled in (the scenario itself when it needs none
+// of them, e.g. once resolved). Throws InputError naming the key.
 Scenario resolve_design(const Scenario& scenario);
 
 }  // namespace canalsim::scenarios

@@ -28,7 +28,7 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
   g.max_opening_m = t.number("max_opening_m", g.max_opening_m, {0.0, 100.0, true}, "m");
   if (t.is_string("opening_m")) {
     if (t.string("opening_m", "") != "auto") {
-      t.fail("opening_m", "= \"" + t.string("opening_m", "") + "\": expected a number in [0, max_opening_m] m or \"auto\"");
+      t.fail_value("opening_m", "\"" + t.string("opening_m", "") + "\"", "expected a number in [0, max_opening_m] m or \"auto\"");
     }
     g.auto_opening = true;
   } else {
@@ -65,8 +65,7 @@ PoolSpec read_pool(TomlTable t) {
     off.kind = o.choice("kind", "fixed", {"fixed", "orifice"}) == "fixed" ? OfftakeKind::fixed : OfftakeKind::orifice;
     off.invert_m = o.number("invert_m", off.invert_m, {0.0, p.wall_height_m}, "m above the bed");
     if (off.kind == OfftakeKind::orifice && !(p.target_depth_m > off.invert_m)) {
-      o.fail("kind", "= \"orifice\": expected the pool to have a target_depth_m above the invert (" +
-                         std::to_string(off.invert_m) + " m) to size the orifice");
+      o.fail_value("kind", "\"orifice\"", "expected the pool to have a target_depth_m above the invert_m to size the orifice");
     }
     o.reject_unknown_keys();
     p.offtakes.push_back(off);
@@ -153,7 +152,7 @@ EventSpec read_event(TomlTable t, const Scenario& s, double previous_t) {
   ev.t_s = t.required_number("t_s", {previous_t, 1.0e7}, "s (events in time order)");
   ev.pool = t.integer("pool", 0, 0, static_cast<int>(s.pools.size()));
   const int offtakes = ev.pool > 0 ? static_cast<int>(s.pools[static_cast<std::size_t>(ev.pool - 1)].offtakes.size()) : 0;
-  if (ev.pool > 0 && offtakes == 0) t.fail("pool", "= " + std::to_string(ev.pool) + ": expected a pool with offtakes");
+  if (ev.pool > 0 && offtakes == 0) t.fail_value("pool", std::to_string(ev.pool), "expected a pool with offtakes");
   ev.offtake = t.integer("offtake", 1, 1, std::max(offtakes, 1));
   ev.offtake_m3s = t.number("offtake_m3s", ev.offtake_m3s, {0.0, 1.0e4}, "m^3/s");
   ev.inflow_m3s = t.number("inflow_m3s", ev.inflow_m3s, {0.0, 1.0e5}, "m^3/s");
@@ -202,18 +201,18 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     const std::size_t i = s.gates.size() - 1;
     const bool targets = i + 1 < s.pools.size() && s.pools[i].target_depth_m > 0.0 && s.pools[i + 1].target_depth_m > 0.0;
     if (s.gates.back().auto_opening && !targets) {
-      g.fail("opening_m", "= \"auto\": expected target_depth_m on the pools on both sides (pools[" +
+      g.fail_value("opening_m", "\"auto\"", "expected target_depth_m on the pools on both sides (pools[" +
                               std::to_string(i) + "] and pools[" + std::to_string(i + 1) + "])");
     }
   }
   if (s.head_gate && s.head_gate->auto_opening && s.pools.front().target_depth_m <= 0.0) {
     auto h = root.table("head_gate");
-    h.fail("opening_m", "= \"auto\": expected target_depth_m on pools[0]");
+    h.fail_value("opening_m", "\"auto\"", "expected target_depth_m on pools[0]");
   }
   s.downstream = read_downstream(root.table("downstream"));
   if (s.downstream.gate.auto_opening) {
     auto g = root.table("downstream").table("gate");
-    g.fail("opening_m", "= \"auto\": expected a number: the end gate has no automatic opening");
+    g.fail_value("opening_m", "\"auto\"", "expected a number: the end gate has no automatic opening");
   }
   s.sensors = read_sensors(root.table("sensors"), SensorSpec{});
   {

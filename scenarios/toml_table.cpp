@@ -58,6 +58,10 @@ void TomlTable::fail(const std::string& key, const std::string& what) const {
   throw InputError(where(node) + ": " + (key.empty() ? path_ : dotted(key)) + ": " + what);
 }
 
+void TomlTable::fail_value(const std::string& key, const std::string& value, const std::string& what) const {
+  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = " + value + ": " + what);
+}
+
 bool TomlTable::has(const std::string& key) const { return table_.contains(key); }
 
 bool TomlTable::is_string(const std::string& key) const {

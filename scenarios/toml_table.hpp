@@ -47,6 +47,8 @@ class TomlTable {
   void reject_unknown_keys() const;
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  // "file:line: key = value: what" for a value that is valid alone but not in context.
+  [[noreturn]] void fail_value(const std::string& key, const std::string& value, const std::string& what) const;
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
 
