@@ -2,21 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
 
 #include "gates/sluice_gate.hpp"
 #include "scenarios/recording.hpp"
+#include "scenarios/toml_table.hpp"
 
 namespace canalsim::scenarios {
 namespace {
-
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", v);
-  return buffer;
-}
 
 double offtake_total(const PoolSpec& pool) {
   double sum = 0.0;
@@ -79,9 +73,9 @@ std::vector<PoolFlows> design_flows(const Scenario& s) {
   if (s.upstream.kind == UpstreamKind::discharge) {
     head = s.upstream.discharge_m3s;
     if (end_known && std::abs(head - total_offtakes - end_flow) > 1e-9 * std::max(head, 1.0)) {
-      throw InputError(s.source + ": upstream.discharge_m3s = " + number(head) +
+      throw InputError(s.source + ": upstream.discharge_m3s = " + format_value(head) +
                        ": expected the offtakes' design discharges plus the end's outflow (" +
-                       number(total_offtakes + end_flow) + " m^3/s) for a steady design state");
+                       format_value(total_offtakes + end_flow) + " m^3/s) for a steady design state");
     }
   } else if (end_known) {
     head = total_offtakes + end_flow;
@@ -95,7 +89,7 @@ std::vector<PoolFlows> design_flows(const Scenario& s) {
     q -= offtake_total(s.pools[i]);
     if (q < -1e-9 * std::max(head, 1.0)) {
       throw InputError(s.source + ": pools[" + std::to_string(i) + "].offtakes: the design discharges exceed the flow "
-                       "reaching the pool (" + number(flows[i].inflow) + " m^3/s)");
+                       "reaching the pool (" + format_value(flows[i].inflow) + " m^3/s)");
     }
     flows[i].outflow = std::max(q, 0.0);
   }
@@ -127,7 +121,7 @@ BackwaterProfile backwater_profile(const PoolSpec& pool, double inflow, double e
       y -= h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
       if (!(y > 0.0) || squared_froude(section, q, y, g) > 0.95) {
         throw std::runtime_error("pool '" + pool.name + "': the design backwater profile reaches critical flow at x = " +
-                                 number(x - h) + " m (a target depth too low for Q = " + number(q) + " m^3/s?)");
+                                 format_value(x - h) + " m (a target depth too low for Q = " + format_value(q) + " m^3/s?)");
       }
     }
   };
@@ -146,9 +140,9 @@ double gate_opening_for(const gates::GateGeometry& gate, double discharge, doubl
   const gates::SluiceGate law(gate.law);
   auto passed = [&](double a) { return gate.width * law.discharge(y1, y3, a); };
   if (passed(max_opening) < discharge) {
-    throw std::runtime_error("cannot pass " + number(discharge) + " m^3/s with y1 = " + number(y1) + " m, y3 = " +
-                             number(y3) + " m even fully open (" + number(max_opening) + " m passes " +
-                             number(passed(max_opening)) + " m^3/s)");
+    throw std::runtime_error("cannot pass " + format_value(discharge) + " m^3/s with y1 = " + format_value(y1) + " m, y3 = " +
+                             format_value(y3) + " m even fully open (" + format_value(max_opening) + " m passes " +
+                             format_value(passed(max_opening)) + " m^3/s)");
   }
   // q rises with the opening up to the critical cap (sluice_gate.hpp): bisection keeps the
   // smallest opening that passes the flow.
@@ -184,7 +178,7 @@ Scenario resolve_design(const Scenario& in) {
       const double head = p.design_depth_m[static_cast<std::size_t>(offtake_cell(p, o.x_m))] - o.invert_m;
       if (!(head > 0.0)) {
         throw InputError(s.source + ": pools[" + std::to_string(i) + "].offtakes[" + std::to_string(k) +
-                         "].invert_m = " + number(o.invert_m) + ": expected it below the design level");
+                         "].invert_m = " + format_value(o.invert_m) + ": expected it below the design level");
       }
       o.coefficient = o.discharge_m3s / std::sqrt(head);
     }

@@ -7,13 +7,13 @@
 #include "scenarios/recording.hpp"
 
 namespace canalsim::scenarios {
-namespace {
-
 std::string format_value(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%g", v);
   return buffer;
 }
+
+namespace {
 
 std::string type_name(const toml::node& node) {
   switch (node.type()) {

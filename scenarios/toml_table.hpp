@@ -13,6 +13,9 @@
 
 namespace canalsim::scenarios {
 
+// A number as messages print it ("%g": 6 significant digits).
+std::string format_value(double v);
+
 // Inclusive or exclusive numeric range used in messages and checks.
 struct Range {
   double min;
