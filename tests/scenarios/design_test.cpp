@@ -113,5 +113,36 @@ TEST(DesignFlows, EachPoolPassesTheHeadFlowLessTheOfftakesUpstream) {
   EXPECT_THROW(design_flows(s), InputError);
 }
 
+TEST(ResolveDesign, HeadGateOpeningPassesTheOfftakesFromTheSupplyLevel) {
+  // A 1.5 m supply level feeds one pool through an automatic head gate; the pool's orifice takes
+  // 0.5 m³/s and the end is closed, so the head gate must pass 0.5 m³/s. The gate flows free
+  // (y3 ~ 0.45 m), so Swamee's free-flow formula, written out here, must give 0.5 m³/s.
+  Scenario s;
+  s.source = "test";
+  s.upstream.kind = UpstreamKind::level;
+  s.upstream.level_m = 1.5;
+  GateSpec head;
+  head.width_m = 1.0;
+  head.max_opening_m = 1.0;
+  head.auto_opening = true;
+  s.head_gate = head;
+  PoolSpec p = long_trapezoid(1000.0, 20, 0.001);
+  p.target_depth_m = 0.9;
+  OfftakeSpec outlet;
+  outlet.x_m = 1000.0;
+  outlet.discharge_m3s = 0.5;
+  outlet.kind = OfftakeKind::orifice;
+  p.offtakes.push_back(outlet);
+  s.pools.push_back(p);
+  s.downstream.kind = DownstreamKind::closed;
+  const Scenario r = resolve_design(s);
+  const double a = r.head_gate->opening_m, y1 = 1.5;
+  EXPECT_FALSE(r.head_gate->auto_opening);
+  EXPECT_NEAR(0.864 * a * std::sqrt(9.81 * y1) * std::pow((y1 - a) / (y1 + 15.0 * a), 0.072), 0.5, 1e-9);
+  // The orifice delivers its design discharge at the design depth of its cell.
+  const double h = r.pools[0].design_depth_m.back();
+  EXPECT_NEAR(r.pools[0].offtakes[0].coefficient * std::sqrt(h), 0.5, 1e-12);
+}
+
 }  // namespace
 }  // namespace canalsim::scenarios
