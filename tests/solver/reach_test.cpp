@@ -11,16 +11,21 @@
 namespace canalsim::solver {
 namespace {
 
-TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
-  Canal canal;
+// A 10 m reach of 10 cells, 1 m deep at rest, walls at both ends.
+void walled_tank(Canal& canal, const Section& section) {
   ReachSpec spec;
   spec.length = 10.0;
   spec.cells = 10;
-  spec.section = {1.0, 0.0};
+  spec.section = section;
   spec.initial_depth.assign(10, 1.0);
   ASSERT_TRUE(canal.add_reach(spec));
   ASSERT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<WallBoundary>()));
   ASSERT_TRUE(canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>()));
+}
+
+TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
+  Canal canal;
+  walled_tank(canal, {1.0, 0.0});
   const double k = 0.01;  // m^2.5/s: 10 L/s at 1 m, the tank (10 m²) falls ~1 mm/s
   EXPECT_EQ(canal.reach(0).add_outlet(9, k, 0.0), 0);
   ASSERT_TRUE(canal.advance_to(500.0));
@@ -38,14 +43,7 @@ TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
 
 TEST(Outlets, AChangedCoefficientTakesEffectAndZeroStopsTheOutlet) {
   Canal canal;
-  ReachSpec spec;
-  spec.length = 10.0;
-  spec.cells = 10;
-  spec.section = {1.0, 1.5};
-  spec.initial_depth.assign(10, 1.0);
-  ASSERT_TRUE(canal.add_reach(spec));
-  ASSERT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<WallBoundary>()));
-  ASSERT_TRUE(canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>()));
+  walled_tank(canal, {1.0, 1.5});
   canal.reach(0).add_outlet(0, 0.02, 0.2);
   ASSERT_TRUE(canal.advance_to(10.0));
   canal.reach(0).set_outlet_coefficient(0, 0.0);
