@@ -117,15 +117,15 @@ double branch_depth(const Section& s, double g, End end, double w) {
 // two or three law evaluations. Returns nullopt when Newton leaves the subcritical branch or does
 // not converge quickly; the caller then uses the bracketed solve.
 std::optional<double> newton_from_guess(const std::function<double(double, double*)>& residual,
-                                        double branch, double guess) {
-  if (!(guess > branch)) return std::nullopt;
+                                        const std::function<bool(double)>& subcritical, double guess) {
+  if (!(guess > 0.0) || !subcritical(guess)) return std::nullopt;
   double h = guess;
   for (int it = 0; it < 8; ++it) {
     double slope = 0.0;
     const double r = residual(h, &slope);
     if (!(slope > 0.0)) return std::nullopt;
     const double next = h - r / slope;
-    if (!(next > branch)) return std::nullopt;
+    if (!(next > 0.0) || !subcritical(next)) return std::nullopt;
     if (std::abs(next - h) <= 1e-13 * h) return next;
     h = next;
   }
@@ -146,8 +146,14 @@ std::optional<double> solve_face_depth(const Section& section, double gravity, E
     if (slope) *slope = sign * (a.dq_dh - l.dq_dh);
     return sign * (a.q - l.q);
   };
+  // Above the branch depth (h > branch_depth) the face is subcritical towards the outside; testing
+  // that directly spares the warm start the bisection for the branch depth.
+  const auto subcritical = [&](double h) {
+    const Allowed a = allowed_discharge(section, gravity, end, w, h);
+    return (end == End::downstream ? a.velocity - a.celerity : -a.velocity - a.celerity) <= 0.0;
+  };
+  if (const auto quick = newton_from_guess(residual, subcritical, guess)) return quick;
   double lo = branch_depth(section, gravity, end, w);
-  if (const auto quick = newton_from_guess(residual, lo, guess)) return quick;
   if (residual(lo, nullptr) > 0.0) return std::nullopt;  // choked: no subcritical face state
   double hi = std::max({2.0 * lo, 2.0 * cell.depth, 1e-4});
   while (residual(hi, nullptr) < 0.0) {
@@ -318,31 +324,57 @@ solver::LinkFlux GateLink::flux(const solver::LinkInput& in) const {
   auto constant = [](double q) {
     return [q](double) { return coupling::LawValue{q, 0.0}; };
   };
-  // Face depths that the two outgoing invariants allow for a trial discharge Q.
+  // Face depths that the two outgoing invariants allow for a trial discharge Q, warm-started from
+  // the previous trial's (the bisection moves Q a little at a time).
   auto depths = [&](double q, double* hu, double* hd) {
     const auto up = coupling::solve_face_depth(in.upstream_section, g, End::downstream,
-                                               in.upstream_cell, constant(q), -1.0);
+                                               in.upstream_cell, constant(q), *hu);
     const auto dn = coupling::solve_face_depth(in.downstream_section, g, End::upstream,
-                                               in.downstream_cell, constant(q), -1.0);
+                                               in.downstream_cell, constant(q), *hd);
     if (!up || !dn) return false;
     *hu = *up;
     *hd = *dn;
     return true;
   };
   // G(Q) = Q − gate(h_u(Q), h_d(Q)) increases with Q: h_u falls and h_d rises as Q grows.
-  auto gap = [&](double q, double* hu, double* hd) {
-    if (!depths(q, hu, hd)) return q > 0.0 ? 1.0 : -1.0;
+  auto gap = [&](double q, double* hu, double* hd, bool* valued) {
+    *valued = depths(q, hu, hd);
+    if (!*valued) return q > 0.0 ? 1.0 : -1.0;
     const double y1 = in.upstream_cell.bed + *hu - sill;
     const double y3 = in.downstream_cell.bed + *hd - sill;
     return q - width_ * law_.discharge(std::max(y1, 0.0), std::max(y3, 0.0), a);
   };
   double hu = in.upstream_cell.depth, hd = in.downstream_cell.depth;
   const double scale = width_ * critical_discharge(std::max({hu, hd, 1e-6}), g) * 2.0 + 1e-12;
-  double lo = -scale, hi = scale;
+  // Root of G on [−scale, scale]: bisection until both bracket ends have a face state (G is then
+  // a value, not just a sign), then the Illinois variant of regula falsi (Dowell & Jarratt 1971),
+  // which keeps the bracket and converges superlinearly — a dozen trials instead of ~45.
+  double lo = -scale, hi = scale, g_lo = 0.0, g_hi = 0.0;
+  bool lo_valued = false, hi_valued = false;
+  int kept = 0;  // which end the last trial replaced: −1 lo, +1 hi
   double q = 0.0;
   for (int it = 0; it < 200 && hi - lo > 1e-13 * scale; ++it) {
-    q = 0.5 * (lo + hi);
-    (gap(q, &hu, &hd) < 0.0 ? lo : hi) = q;
+    q = lo_valued && hi_valued ? lo - g_lo * (hi - lo) / (g_hi - g_lo) : 0.5 * (lo + hi);
+    if (!(q > lo && q < hi)) q = 0.5 * (lo + hi);
+    bool valued = false;
+    const double gq = gap(q, &hu, &hd, &valued);
+    if (gq == 0.0) {
+      lo = hi = q;
+      break;
+    }
+    if (gq < 0.0) {
+      lo = q, g_lo = gq, lo_valued = valued;
+      if (kept == -1 && hi_valued) g_hi *= 0.5;  // Illinois: halve the stale end's value
+      kept = -1;
+    } else {
+      hi = q, g_hi = gq, hi_valued = valued;
+      if (kept == 1 && lo_valued) g_lo *= 0.5;
+      kept = 1;
+    }
+    if (std::abs(gq) <= 1e-14 * scale) {
+      lo = hi = q;
+      break;
+    }
   }
   q = 0.5 * (lo + hi);
   if (!depths(q, &hu, &hd)) {
@@ -380,5 +412,23 @@ Flux WeirBoundary::flux(const solver::BoundaryInput& in) const {
   if (!h) return critical_face_flux(in.section, in.gravity, End::downstream, in.cell);
   return face_flux_with_speed(in.section, in.gravity, *h, law(*h).q);
 }
+
+// --- pump ------------------------------------------------------------------------------------------
+
+PumpBoundary::PumpBoundary(double discharge, double stop_depth)
+    : discharge_(discharge), stop_depth_(stop_depth) {}
+
+Flux PumpBoundary::flux(const solver::BoundaryInput& in) const {
+  auto law = [&](double h) {
+    const bool throttled = h < stop_depth_;
+    return coupling::LawValue{discharge_ * (throttled ? std::max(h, 0.0) / stop_depth_ : 1.0),
+                              throttled && h > 0.0 ? discharge_ / stop_depth_ : 0.0};
+  };
+  const auto h = coupling::solve_face_depth(in.section, in.gravity, End::downstream, in.cell, law, -1.0);
+  if (!h) return critical_face_flux(in.section, in.gravity, End::downstream, in.cell);
+  return face_flux_with_speed(in.section, in.gravity, *h, law(*h).q);
+}
+
+void PumpBoundary::on_step_accepted(double, double, double face_discharge) { last_discharge_ = face_discharge; }
 
 }  // namespace canalsim::gates

@@ -164,6 +164,23 @@ class WeirBoundary final : public solver::Boundary {
   double crest_, coefficient_, width_;
 };
 
+// Pump at a downstream end drawing a fixed discharge Q_p out of the pool, throttled linearly to 0
+// as the depth at the intake falls from `stop_depth` to 0 (a pump protection cut-out; it keeps
+// a pool from being drained below dry):  Q(h) = Q_p min(1, h / stop_depth).
+// The face depth comes from the outgoing invariant (as for the weir), so the mass flux is exactly
+// Q(h_face).
+class PumpBoundary final : public solver::Boundary {
+ public:
+  PumpBoundary(double discharge, double stop_depth);
+  solver::Flux flux(const solver::BoundaryInput& input) const override;
+  void on_step_accepted(double t, double dt, double face_discharge) override;
+  double last_discharge() const { return last_discharge_; }
+
+ private:
+  double discharge_, stop_depth_;
+  double last_discharge_ = 0.0;
+};
+
 // Low-level face solves, exposed for tests.
 namespace coupling {
 

@@ -14,10 +14,20 @@
 
 namespace canalsim::scenarios {
 
-// A lateral offtake: a discharge withdrawn from a pool, spread over the cells around x.
+enum class OfftakeKind {
+  fixed,    // a fixed discharge, whatever the level
+  orifice,  // a gravity outlet: Q = K sqrt(h - invert), K sized to deliver discharge_m3s at design
+};
+
+// A lateral offtake: a discharge withdrawn from a pool in the cell containing x.
 struct OfftakeSpec {
   double x_m = 0.0;             // position from the pool's upstream end
-  double discharge_m3s = 0.0;   // withdrawn discharge (positive = out of the canal)
+  double discharge_m3s = 0.0;   // withdrawn (fixed) or design (orifice) discharge, >= 0
+  OfftakeKind kind = OfftakeKind::fixed;
+  double invert_m = 0.0;        // orifice: invert height above the local bed
+  // orifice: K = Cd A sqrt(2 g) [m^2.5/s]; 0 until scenarios/design.hpp sizes it so that the
+  // outlet delivers discharge_m3s at the pool's design (steady, target-depth) level.
+  double coefficient = 0.0;
 };
 
 // One pool (reach) of prismatic channel.
@@ -32,7 +42,11 @@ struct PoolSpec {
   double manning_n = 0.010;         // s m^-1/3
   int cells = 100;
   double initial_depth_m = 0.0;     // first guess of the steady state; 0 = from the boundaries
+  double target_depth_m = 0.0;      // design depth at the downstream end (check); 0 = none
   std::vector<OfftakeSpec> offtakes;
+  // Design (backwater) depth at each cell centre, filled by scenarios/design.hpp when the pool
+  // has a target depth; the first guess of the steady state. Not a TOML key.
+  std::vector<double> design_depth_m;
 };
 
 enum class GateLaw { swamee, simple };
@@ -47,6 +61,9 @@ struct GateSpec {
   double leakage_m = 0.0;           // extra effective opening (a gate that does not seal)
   double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
   bool controlled = false;          // driven by the experiment's input signal
+  // opening_m = "auto": opening_m is computed (scenarios/design.hpp) so that the gate passes the
+  // design flow with the upstream pool at its target depth.
+  bool auto_opening = false;
 };
 
 enum class UpstreamKind { level, reservoir, discharge, recorded };
@@ -65,7 +82,7 @@ struct UpstreamSpec {
   double pid_td_s = 0.0;            // derivative time
 };
 
-enum class DownstreamKind { gate, weir, level };
+enum class DownstreamKind { gate, weir, level, closed, pump };
 
 struct DownstreamSpec {
   DownstreamKind kind = DownstreamKind::gate;
@@ -75,6 +92,8 @@ struct DownstreamSpec {
   double weir_coefficient = 1.7;    // weir: Q = C w (h - crest)^1.5, C in m^0.5/s
   double weir_width_m = 0.0;        // weir: 0 = channel width
   double level_m = 0.05;            // level: fixed depth at the end
+  double pump_discharge_m3s = 0.0;  // pump: discharge drawn out of the last pool
+  double pump_stop_depth_m = 0.1;   // pump: below this depth the pump throttles linearly to 0
 };
 
 struct SensorSpec {
@@ -102,13 +121,25 @@ struct InputSpec {
   std::string file;                 // file: a recording whose u_mm column is replayed
 };
 
+// A change of flows at time t_s during an experiment (e.g. the ASCE flow-change tests): an
+// offtake's discharge (a fixed offtake's withdrawal; an orifice's coefficient scaled so that it
+// would deliver the new discharge at its design level) and/or the head inflow.
+struct EventSpec {
+  double t_s = 0.0;
+  int pool = 0;                     // 1-based pool of the offtake; 0 = no offtake change
+  int offtake = 1;                  // 1-based offtake within the pool
+  double offtake_m3s = -1.0;        // new offtake discharge; < 0 = unchanged
+  double inflow_m3s = -1.0;         // new head inflow (upstream kind "discharge"); < 0 = unchanged
+};
+
 struct ExperimentSpec {
   std::string name;
-  double operating_opening_mm = 25.0;  // operating point of the controlled gate
+  double operating_opening_mm = 25.0;  // operating point of the controlled gate (if any)
   double duration_s = 255.5;
   double settle_s = 0.0;            // simulated but not recorded before t = 0
   InputSpec input;
   std::optional<SensorSpec> sensors;   // overrides the scenario's sensors
+  std::vector<EventSpec> events;       // in time order
 };
 
 struct NumericsSpec {

@@ -10,6 +10,13 @@
 namespace canalsim::scenarios {
 namespace {
 
+bool has_controlled_gate(const Scenario& s) {
+  bool any = (s.head_gate && s.head_gate->controlled) ||
+             (s.downstream.kind == DownstreamKind::gate && s.downstream.gate.controlled);
+  for (const auto& g : s.gates) any = any || g.controlled;
+  return any;
+}
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const Range kPositiveLength{0.0, 1.0e5, true};
 const Range kNonNegative{0.0, kInf};
@@ -19,7 +26,14 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
   GateSpec g = defaults;
   g.width_m = t.number("width_m", g.width_m, {0.0, 1000.0, true}, "m");
   g.max_opening_m = t.number("max_opening_m", g.max_opening_m, {0.0, 100.0, true}, "m");
-  g.opening_m = t.number("opening_m", g.opening_m, {0.0, g.max_opening_m}, "m");
+  if (t.is_string("opening_m")) {
+    if (t.string("opening_m", "") != "auto") {
+      t.fail_value("opening_m", "\"" + t.string("opening_m", "") + "\"", "expected a number in [0, max_opening_m] m or \"auto\"");
+    }
+    g.auto_opening = true;
+  } else {
+    g.opening_m = t.number("opening_m", g.opening_m, {0.0, g.max_opening_m}, "m");
+  }
   g.law = t.choice("law", g.law == GateLaw::swamee ? "swamee" : "simple", {"swamee", "simple"}) == "swamee"
               ? GateLaw::swamee
               : GateLaw::simple;
@@ -43,10 +57,16 @@ PoolSpec read_pool(TomlTable t) {
   p.manning_n = t.number("manning_n", p.manning_n, {0.0, 0.2}, "s m^-1/3");
   p.cells = t.integer("cells", p.cells, 4, 1000000);
   p.initial_depth_m = t.number("initial_depth_m", p.initial_depth_m, {0.0, p.wall_height_m}, "m (0 = automatic)");
+  p.target_depth_m = t.number("target_depth_m", p.target_depth_m, {0.0, p.wall_height_m}, "m (0 = none)");
   for (auto o : t.tables("offtakes")) {
     OfftakeSpec off;
     off.x_m = o.required_number("x_m", {0.0, p.length_m}, "m (inside the pool)");
     off.discharge_m3s = o.required_number("discharge_m3s", {0.0, 1.0e4}, "m^3/s");
+    off.kind = o.choice("kind", "fixed", {"fixed", "orifice"}) == "fixed" ? OfftakeKind::fixed : OfftakeKind::orifice;
+    off.invert_m = o.number("invert_m", off.invert_m, {0.0, p.wall_height_m}, "m above the bed");
+    if (off.kind == OfftakeKind::orifice && !(p.target_depth_m > off.invert_m)) {
+      o.fail_value("kind", "\"orifice\"", "expected the pool to have a target_depth_m above the invert_m to size the orifice");
+    }
     o.reject_unknown_keys();
     p.offtakes.push_back(off);
   }
@@ -75,14 +95,20 @@ UpstreamSpec read_upstream(TomlTable t) {
 
 DownstreamSpec read_downstream(TomlTable t) {
   DownstreamSpec d;
-  const std::string kind = t.choice("kind", "gate", {"gate", "weir", "level"});
-  d.kind = kind == "gate" ? DownstreamKind::gate : kind == "weir" ? DownstreamKind::weir : DownstreamKind::level;
+  const std::string kind = t.choice("kind", "gate", {"gate", "weir", "level", "closed", "pump"});
+  d.kind = kind == "gate"     ? DownstreamKind::gate
+           : kind == "weir"   ? DownstreamKind::weir
+           : kind == "level"  ? DownstreamKind::level
+           : kind == "closed" ? DownstreamKind::closed
+                              : DownstreamKind::pump;
   if (t.has("gate")) d.gate = read_gate(t.table("gate"), d.gate);
   d.tail_level_m = t.number("tail_level_m", d.tail_level_m, {0.0, 100.0}, "m (0 = free outfall)");
   d.weir_crest_m = t.number("weir_crest_m", d.weir_crest_m, {0.0, 100.0}, "m");
   d.weir_coefficient = t.number("weir_coefficient", d.weir_coefficient, {0.0, 10.0, true}, "m^0.5/s");
   d.weir_width_m = t.number("weir_width_m", d.weir_width_m, {0.0, 1000.0}, "m (0 = channel width)");
   d.level_m = t.number("level_m", d.level_m, {0.0, 100.0, true}, "m");
+  d.pump_discharge_m3s = t.number("pump_discharge_m3s", d.pump_discharge_m3s, {0.0, 1.0e5}, "m^3/s");
+  d.pump_stop_depth_m = t.number("pump_stop_depth_m", d.pump_stop_depth_m, {0.0, 100.0, true}, "m");
   t.reject_unknown_keys();
   return d;
 }
@@ -121,15 +147,42 @@ InputSpec read_input(TomlTable t) {
   return in;
 }
 
-ExperimentSpec read_experiment(TomlTable t, const SensorSpec& scenario_sensors) {
+EventSpec read_event(TomlTable t, const Scenario& s, double previous_t) {
+  EventSpec ev;
+  ev.t_s = t.required_number("t_s", {previous_t, 1.0e7}, "s (events in time order)");
+  ev.pool = t.integer("pool", 0, 0, static_cast<int>(s.pools.size()));
+  const int offtakes = ev.pool > 0 ? static_cast<int>(s.pools[static_cast<std::size_t>(ev.pool - 1)].offtakes.size()) : 0;
+  if (ev.pool > 0 && offtakes == 0) t.fail_value("pool", std::to_string(ev.pool), "expected a pool with offtakes");
+  ev.offtake = t.integer("offtake", 1, 1, std::max(offtakes, 1));
+  ev.offtake_m3s = t.number("offtake_m3s", ev.offtake_m3s, {0.0, 1.0e4}, "m^3/s");
+  ev.inflow_m3s = t.number("inflow_m3s", ev.inflow_m3s, {0.0, 1.0e5}, "m^3/s");
+  if ((ev.pool > 0) != t.has("offtake_m3s")) {
+    t.fail(ev.pool > 0 ? "pool" : "offtake_m3s", "expected pool and offtake_m3s together");
+  }
+  if (t.has("inflow_m3s") && s.upstream.kind != UpstreamKind::discharge) {
+    t.fail("inflow_m3s", "expected [upstream] kind = \"discharge\" for an inflow change");
+  }
+  if (!t.has("inflow_m3s") && ev.pool == 0) t.fail("t_s", "the event changes nothing: expected offtake_m3s or inflow_m3s");
+  t.reject_unknown_keys();
+  return ev;
+}
+
+ExperimentSpec read_experiment(TomlTable t, const Scenario& s) {
+  const SensorSpec& scenario_sensors = s.sensors;
   ExperimentSpec e;
   e.name = t.string("name", "");
   if (e.name.empty()) t.fail("name", "is missing: expected a non-empty experiment name");
-  e.operating_opening_mm = t.required_number("operating_opening_mm", {0.0, 1.0e5}, "mm");
+  // Required when a gate is driven; an experiment with no controlled gate runs at fixed openings.
+  e.operating_opening_mm = has_controlled_gate(s)
+                               ? t.required_number("operating_opening_mm", {0.0, 1.0e5}, "mm")
+                               : t.number("operating_opening_mm", 0.0, {0.0, 1.0e5}, "mm");
   e.duration_s = t.number("duration_s", e.duration_s, {0.0, 1.0e7, true}, "s");
   e.settle_s = t.number("settle_s", e.settle_s, kNonNegative, "s");
   if (t.has("input")) e.input = read_input(t.table("input"));
   if (t.has("sensors")) e.sensors = read_sensors(t.table("sensors"), scenario_sensors);
+  for (auto ev : t.tables("events")) {
+    e.events.push_back(read_event(ev, s, e.events.empty() ? 0.0 : e.events.back().t_s));
+  }
   t.reject_unknown_keys();
   return e;
 }
@@ -143,8 +196,24 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
   if (root.has("head_gate")) s.head_gate = read_gate(root.table("head_gate"), GateSpec{});
   for (auto p : root.tables("pools")) s.pools.push_back(read_pool(p));
   if (s.pools.empty()) root.fail("", "expected at least one [[pools]] table");
-  for (auto g : root.tables("gates")) s.gates.push_back(read_gate(g, GateSpec{}));
+  for (auto g : root.tables("gates")) {
+    s.gates.push_back(read_gate(g, GateSpec{}));
+    const std::size_t i = s.gates.size() - 1;
+    const bool targets = i + 1 < s.pools.size() && s.pools[i].target_depth_m > 0.0 && s.pools[i + 1].target_depth_m > 0.0;
+    if (s.gates.back().auto_opening && !targets) {
+      g.fail_value("opening_m", "\"auto\"", "expected target_depth_m on the pools on both sides (pools[" +
+                              std::to_string(i) + "] and pools[" + std::to_string(i + 1) + "])");
+    }
+  }
+  if (s.head_gate && s.head_gate->auto_opening && s.pools.front().target_depth_m <= 0.0) {
+    auto h = root.table("head_gate");
+    h.fail_value("opening_m", "\"auto\"", "expected target_depth_m on pools[0]");
+  }
   s.downstream = read_downstream(root.table("downstream"));
+  if (s.downstream.gate.auto_opening) {
+    auto g = root.table("downstream").table("gate");
+    g.fail_value("opening_m", "\"auto\"", "expected a number: the end gate has no automatic opening");
+  }
   s.sensors = read_sensors(root.table("sensors"), SensorSpec{});
   {
     auto n = root.table("numerics");
@@ -154,7 +223,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     s.numerics.steady_tolerance_m = n.number("steady_tolerance_m", s.numerics.steady_tolerance_m, {0.0, 1.0, true}, "m");
     n.reject_unknown_keys();
   }
-  for (auto e : root.tables("experiments")) s.experiments.push_back(read_experiment(e, s.sensors));
+  for (auto e : root.tables("experiments")) s.experiments.push_back(read_experiment(e, s));
   root.reject_unknown_keys();
   return s;
 }
@@ -211,9 +280,12 @@ void validate(const Scenario& s) {
   for (std::size_t i = 0; i < s.experiments.size(); ++i) {
     const auto& e = s.experiments[i];
     const std::string key = "experiments[" + std::to_string(i) + "]";
-    if (!driven) invalid(s, key, "an experiment needs a gate with controlled = true");
-    const double max_mm = driven->max_opening_m * 1000.0;
-    if (e.operating_opening_mm > max_mm) {
+    if (!driven && e.input.kind != InputKind::constant) {
+      invalid(s, key + ".input.kind", "an experiment with an input signal needs a gate with controlled = true; "
+                                      "expected kind = \"constant\" without one");
+    }
+    const double max_mm = driven ? driven->max_opening_m * 1000.0 : 0.0;
+    if (driven && e.operating_opening_mm > max_mm) {
       invalid(s, key + ".operating_opening_mm", "= " + std::to_string(e.operating_opening_mm) +
                                                     " mm: expected at most the gate's max_opening_m (" +
                                                     std::to_string(max_mm) + " mm)");

@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 
+#include "scenarios/design.hpp"
 #include "scenarios/prbs.hpp"
 #include "scenarios/sensors.hpp"
 #include "scenarios/signals.hpp"
@@ -30,19 +32,9 @@ solver::SolverOptions solver_options(const NumericsSpec& n) {
   return o;
 }
 
-gates::GateGeometry gate_geometry(const GateSpec& g) {
-  gates::GateGeometry geometry;
-  geometry.width = g.width_m;
-  geometry.law.law = g.law == GateLaw::swamee ? gates::GateLaw::swamee : gates::GateLaw::simple;
-  // One meaning for both laws: a multiplier on the published coefficient (Swamee's; Cd = 0.6 of
-  // the paper's eq. 9/11).
-  geometry.law.discharge_coefficient_multiplier = g.discharge_coefficient;
-  geometry.law.leakage_opening = g.leakage_m;
-  return geometry;
-}
-
 double automatic_initial_depth(const Scenario& s, const PoolSpec& pool) {
   if (pool.initial_depth_m > 0.0) return pool.initial_depth_m;
+  if (pool.target_depth_m > 0.0) return pool.target_depth_m;
   if (s.head_gate) return std::min(0.85 * s.upstream.level_m, 0.9 * pool.wall_height_m);
   if (s.downstream.kind == DownstreamKind::level) return s.downstream.level_m;
   return 0.5 * pool.wall_height_m;
@@ -55,21 +47,29 @@ solver::ReachSpec reach_spec(const Scenario& s, const PoolSpec& pool) {
   r.cells = pool.cells;
   r.section = {pool.bottom_width_m, pool.side_slope};
   r.manning_n = pool.manning_n;
-  const double dx = pool.length_m / pool.cells;
   r.bed_elevation.resize(static_cast<std::size_t>(pool.cells));
-  for (int i = 0; i < pool.cells; ++i) {
-    r.bed_elevation[static_cast<std::size_t>(i)] = pool.bed_elevation_m - pool.bed_slope * (i + 0.5) * dx;
-  }
-  r.initial_depth.assign(static_cast<std::size_t>(pool.cells), automatic_initial_depth(s, pool));
+  for (int i = 0; i < pool.cells; ++i) r.bed_elevation[static_cast<std::size_t>(i)] = cell_bed_elevation(pool, i);
+  // First guess of the steady state: the design (backwater) profile when there is one.
+  const bool design = pool.initial_depth_m <= 0.0 && !pool.design_depth_m.empty();
+  r.initial_depth = design ? pool.design_depth_m
+                           : std::vector<double>(static_cast<std::size_t>(pool.cells), automatic_initial_depth(s, pool));
   return r;
 }
 
-void apply_offtakes(solver::Reach& reach, const PoolSpec& pool) {
-  const double dx = reach.cell_length();
+// Fixed offtakes withdraw −Q/dx from their cell; orifices become level-dependent outlets of the
+// reach (solver/reach.hpp). Returns a handle on each offtake for the experiment's events.
+std::vector<BuiltCanal::Offtake> apply_offtakes(solver::Reach& reach, const PoolSpec& pool) {
+  std::vector<BuiltCanal::Offtake> handles;
   for (const auto& off : pool.offtakes) {
-    const int cell = std::clamp(static_cast<int>(off.x_m / dx), 0, reach.cells() - 1);
-    reach.lateral_inflow()[static_cast<std::size_t>(cell)] -= off.discharge_m3s / dx;
+    BuiltCanal::Offtake h{offtake_cell(pool, off.x_m), -1, off.discharge_m3s, off.coefficient, off.discharge_m3s};
+    if (off.kind == OfftakeKind::orifice) {
+      h.outlet = reach.add_outlet(h.cell, off.coefficient, off.invert_m);
+    } else {
+      reach.lateral_inflow()[static_cast<std::size_t>(h.cell)] -= off.discharge_m3s / reach.cell_length();
+    }
+    handles.push_back(h);
   }
+  return handles;
 }
 
 std::shared_ptr<gates::GateOperation> operation_for(const GateSpec& g,
@@ -128,6 +128,10 @@ std::shared_ptr<solver::Boundary> make_downstream(const Scenario& s, const solve
     }
     case DownstreamKind::level:
       return solver::FixedLevelBoundary::depth(d.level_m);
+    case DownstreamKind::closed:
+      return std::make_shared<solver::WallBoundary>();
+    case DownstreamKind::pump:
+      return std::make_shared<gates::PumpBoundary>(d.pump_discharge_m3s, d.pump_stop_depth_m);
   }
   throw std::logic_error("unknown downstream kind");
 }
@@ -140,18 +144,41 @@ struct TrueState {
   double below_gate_depth;  // y_dw [m]
   double end_depth;         // y_dwe [m]
   double discharge;         // through the controlled gate over the last step [m³/s]
+  std::vector<double> check_depths;  // at the last cell of each pool, when there are several [m]
 };
 
 TrueState interpolate(const TrueState& a, const TrueState& b, double t) {
   const double w = b.time > a.time ? (t - a.time) / (b.time - a.time) : 1.0;
   auto mix = [w](double x, double y) { return x + w * (y - x); };
+  std::vector<double> checks(a.check_depths.size());
+  for (std::size_t i = 0; i < checks.size(); ++i) checks[i] = mix(a.check_depths[i], b.check_depths[i]);
   return {t, mix(a.upstream_level, b.upstream_level), mix(a.opening, b.opening),
           mix(a.below_gate_depth, b.below_gate_depth), mix(a.end_depth, b.end_depth),
-          mix(a.discharge, b.discharge)};
+          mix(a.discharge, b.discharge), std::move(checks)};
 }
 
 void check(const solver::Status& status, const std::string& what) {
   if (!status) throw std::runtime_error(what + ": " + status.message());
+}
+
+// Records what the experiment's u_mm and q_lps follow: the controlled gate, else the first gate
+// (head gate, else the first gate between pools); a canal without either records u = 0 and the
+// head inflow.
+void watch(BuiltCanal& b, std::shared_ptr<gates::GateOperation> op, std::function<double()> discharge,
+           double max_opening, bool controlled) {
+  if (b.controlled && !controlled) return;  // keep the first gate (or the controlled one)
+  if (b.driven) return;
+  b.controlled = std::move(op);
+  b.controlled_discharge = std::move(discharge);
+  b.controlled_max_opening = max_opening;
+  b.driven = controlled;
+}
+
+std::vector<double> gate_openings(const Scenario& s) {
+  std::vector<double> openings;
+  if (s.head_gate) openings.push_back(s.head_gate->opening_m);
+  for (const auto& g : s.gates) openings.push_back(g.opening_m);
+  return openings;
 }
 
 }  // namespace
@@ -197,11 +224,12 @@ std::function<double(double)> command_signal(const ExperimentSpec& e, const Driv
   return [signal](double t) { return signal->value(t); };
 }
 
-BuiltCanal build_canal(const Scenario& s, const ExperimentSpec& e, const Drive& drive) {
-  BuiltCanal b{solver::Canal(solver_options(s.numerics)), {}, {}, {}, {}, {}, {}, 0.0, {}};
+BuiltCanal build_canal(const Scenario& input, const ExperimentSpec& e, const Drive& drive) {
+  const Scenario s = resolve_design(input);  // automatic openings, orifice sizes, design profiles
+  BuiltCanal b{solver::Canal(solver_options(s.numerics)), {}, {}, {}, {}, {}, {}, 0.0, false, {}, {}, {}, {}, {}};
   for (const PoolSpec& pool : s.pools) {
     check(b.canal.add_reach(reach_spec(s, pool)), s.source + ": pool '" + pool.name + "'");
-    apply_offtakes(b.canal.reach(b.canal.reach_count() - 1), pool);
+    b.offtakes.push_back(apply_offtakes(b.canal.reach(b.canal.reach_count() - 1), pool));
   }
   const auto command = command_signal(e, drive);
   if (s.head_gate) {
@@ -209,15 +237,13 @@ BuiltCanal build_canal(const Scenario& s, const ExperimentSpec& e, const Drive& 
     auto op = operation_for(*s.head_gate, command);
     b.head_gate = std::make_shared<gates::HeadGateBoundary>(gate_geometry(*s.head_gate), b.supply, op);
     check(b.canal.set_boundary(0, solver::End::upstream, b.head_gate), s.source + ": head_gate");
-    if (s.head_gate->controlled) {
-      b.controlled = op;
-      b.controlled_max_opening = s.head_gate->max_opening_m;
-      auto gate = b.head_gate;
-      b.controlled_discharge = [gate] { return gate->last_discharge(); };
-    }
+    auto gate = b.head_gate;
+    watch(b, op, [gate] { return gate->last_discharge(); }, s.head_gate->max_opening_m, s.head_gate->controlled);
   } else {
+    b.head_inflow = std::make_shared<double>(s.upstream.discharge_m3s);
+    auto inflow = b.head_inflow;
     check(b.canal.set_boundary(0, solver::End::upstream,
-                               solver::FixedDischargeBoundary::constant(s.upstream.discharge_m3s)),
+                               std::make_shared<solver::FixedDischargeBoundary>([inflow](double) { return *inflow; })),
           s.source + ": upstream");
   }
   for (std::size_t i = 0; i < s.gates.size(); ++i) {
@@ -226,17 +252,33 @@ BuiltCanal build_canal(const Scenario& s, const ExperimentSpec& e, const Drive& 
     b.gate_links.push_back(link);
     check(b.canal.connect(static_cast<int>(i), static_cast<int>(i) + 1, link),
           s.source + ": gates[" + std::to_string(i) + "]");
-    if (s.gates[i].controlled) {
-      b.controlled = op;
-      b.controlled_max_opening = s.gates[i].max_opening_m;
-      b.controlled_discharge = [link] { return link->last_discharge(); };
-    }
+    watch(b, op, [link] { return link->last_discharge(); }, s.gates[i].max_opening_m, s.gates[i].controlled);
   }
   const int last = b.canal.reach_count() - 1;
   check(b.canal.set_boundary(last, solver::End::downstream, make_downstream(s, b.canal.reach(last), &b.tail_gate)),
         s.source + ": downstream");
   check(b.canal.check_ready(), s.source);
+  if (!b.controlled) {
+    auto inflow = b.head_inflow;
+    watch(b, std::make_shared<gates::GateOperation>(0.0, 0.0), [inflow] { return inflow ? *inflow : 0.0; }, 0.0, false);
+  }
+  b.openings = gate_openings(s);
+  for (const auto& p : s.pools) b.check_bed.push_back(p.bed_elevation_m - p.bed_slope * p.length_m);
   return b;
+}
+
+void apply_event(BuiltCanal& b, const EventSpec& ev) {
+  if (ev.inflow_m3s >= 0.0 && b.head_inflow) *b.head_inflow = ev.inflow_m3s;
+  if (ev.pool <= 0) return;
+  solver::Reach& reach = b.canal.reach(ev.pool - 1);
+  BuiltCanal::Offtake& o = b.offtakes.at(static_cast<std::size_t>(ev.pool - 1)).at(static_cast<std::size_t>(ev.offtake - 1));
+  if (o.outlet >= 0) {
+    // The outlet gate is reset so that it would deliver the new discharge at its design level.
+    reach.set_outlet_coefficient(o.outlet, o.design_coefficient * ev.offtake_m3s / std::max(o.design_m3s, 1e-300));
+  } else {
+    reach.lateral_inflow()[static_cast<std::size_t>(o.cell)] += (o.current_m3s - ev.offtake_m3s) / reach.cell_length();
+    o.current_m3s = ev.offtake_m3s;
+  }
 }
 
 namespace {
@@ -272,6 +314,10 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& opt
     b.head_gate->on_step_accepted(b.canal.time(), 0.0, q);
     if (b.reservoir) b.reservoir->reservoir().start_at_steady_state(q);
   }
+  for (std::size_t i = 0; i < b.gate_links.size(); ++i) {
+    // Likewise the gates between pools: the steady flow entering the next pool.
+    b.gate_links[i]->on_step_accepted(b.canal.time(), 0.0, b.canal.reach(static_cast<int>(i) + 1).discharge().front());
+  }
   if (result.description.empty()) {
     // Time marching: chunks for the progress line.
     const double duration = -t_before;
@@ -293,7 +339,8 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& opt
 
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
   BuiltCanal b = build_canal(s, e, options.drive);
-  if (!b.controlled) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");
+  const bool fixed_input = e.input.kind == InputKind::constant && !options.drive.recording;
+  if (!b.driven && !fixed_input) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");
   const SensorSpec sensors = e.sensors.value_or(s.sensors);
 
   // Start from the steady state of the operating point (the command holds its t = 0 value before
@@ -328,6 +375,19 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   gate_options.sample_period = h;
   Sensor x_up(gate_options);
   std::vector<double> t_s, u_mm, q_lps, regime;
+  // y_check1..N: the depth at the check of each pool (its last cell's level above the bed at the
+  // pool's downstream end), for canals of several pools.
+  const int checks = b.canal.reach_count() > 1 ? b.canal.reach_count() : 0;
+  std::vector<Sensor> y_check;
+  for (int i = 0; i < checks; ++i) y_check.push_back(level_sensor(3 + static_cast<std::uint64_t>(i)));
+  const auto check_depths = [&] {
+    std::vector<double> depths(static_cast<std::size_t>(checks));
+    for (int i = 0; i < checks; ++i) {
+      const auto& r = b.canal.reach(i);
+      depths[static_cast<std::size_t>(i)] = r.level(r.cells() - 1) - b.check_bed[static_cast<std::size_t>(i)];
+    }
+    return depths;
+  };
 
   // The solver steps freely (no step is cut short to hit a sample time); each sample is the linear
   // interpolation in time between the true states before and after it. Between steps of ~h/3 the
@@ -339,14 +399,22 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
                      b.controlled->opening(t),
                      b.canal.sample(0, x_below, solver::Quantity::depth),
                      b.canal.sample(last, x_end, solver::Quantity::depth),
-                     b.controlled_discharge()};
+                     b.controlled_discharge(),
+                     check_depths()};
   };
   TrueState before = snapshot(), after = before;
+  std::size_t next_event = 0;
   for (std::size_t k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * h;
     while (after.time < t) {
+      // Events take effect at their time exactly: no step crosses one.
+      while (next_event < e.events.size() && e.events[next_event].t_s <= b.canal.time() + 1e-9) {
+        apply_event(b, e.events[next_event++]);
+      }
+      const double to_event = next_event < e.events.size() ? e.events[next_event].t_s - b.canal.time()
+                                                           : std::numeric_limits<double>::infinity();
       before = after;
-      check(b.canal.step(), "experiment " + e.name);
+      check(b.canal.step(to_event), "experiment " + e.name);
       after = snapshot();
     }
     const TrueState now = interpolate(before, after, t);
@@ -354,6 +422,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
     y_dw.observe(t, now.below_gate_depth);
     y_up.observe(t, now.upstream_level);
     x_up.observe(t, now.opening);
+    for (int i = 0; i < checks; ++i) y_check[static_cast<std::size_t>(i)].observe(t, now.check_depths[static_cast<std::size_t>(i)]);
     t_s.push_back(t);
     u_mm.push_back(b.controlled->command(t) / kMm);
     q_lps.push_back(now.discharge / kMm);
@@ -362,6 +431,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
     }
   }
   report(1.0);
+  if (options.on_finish) options.on_finish(b);
 
   auto in_mm = [](const std::vector<double>& v) {
     std::vector<double> out(v.size());
@@ -399,6 +469,9 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   }
   rec.set_column(columns::regime, regime);
   rec.set_column("y_lc_mm", std::move(y_lc));
+  for (int i = 0; i < checks; ++i) {
+    rec.set_column("y_check" + std::to_string(i + 1) + "_mm", in_mm(y_check[static_cast<std::size_t>(i)].values()));
+  }
   return rec;
 }
 

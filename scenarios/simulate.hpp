@@ -28,11 +28,34 @@ struct BuiltCanal {
   std::shared_ptr<gates::HeadGateBoundary> head_gate;     // null without a head gate
   std::vector<std::shared_ptr<gates::GateLink>> gate_links;
   std::shared_ptr<gates::TailGateBoundary> tail_gate;     // null unless downstream kind = gate
-  std::shared_ptr<gates::GateOperation> controlled;       // the gate the experiment drives
+  // The gate the experiment drives; with no controlled gate (driven = false) the first gate,
+  // whose opening and discharge u_mm and q_lps then record.
+  std::shared_ptr<gates::GateOperation> controlled;
   double controlled_max_opening = 0.0;
+  bool driven = false;
   // The discharge through the controlled gate over the last step [m³/s].
   std::function<double()> controlled_discharge;
+  // The head inflow of an upstream of kind "discharge" (events change it); null otherwise.
+  std::shared_ptr<double> head_inflow;
+  // Every offtake, per pool, for the experiment's events.
+  struct Offtake {
+    int cell = 0;
+    int outlet = -1;                 // index among the reach's outlets; -1 = fixed discharge
+    double design_m3s = 0.0;         // the scenario's (design) discharge
+    double design_coefficient = 0.0; // orifice K at design [m^2.5/s]
+    double current_m3s = 0.0;        // fixed offtake: the discharge withdrawn now
+  };
+  std::vector<std::vector<Offtake>> offtakes;
+  // Openings of the head gate (if any) and the gates between pools, as built ("auto" resolved) [m].
+  std::vector<double> openings;
+  // Bed elevation at each pool's downstream end x = L [m]: the check depth is the water level of
+  // the pool's last cell above it.
+  std::vector<double> check_bed;
 };
+
+// Applies one event (new offtake discharge, new head inflow) to a built canal, as the run does at
+// the event's time.
+void apply_event(BuiltCanal& canal, const EventSpec& event);
 
 // What drives an experiment besides its own input: a recording whose u_mm replaces the input
 // signal (and whose y_up_mm feeds the head gate when `use_recorded_upstream`).
@@ -48,6 +71,8 @@ struct SimulateOptions {
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
+  // Called with the canal at the end of the run (tests read the volume balance and final state).
+  std::function<void(const BuiltCanal&)> on_finish;
 };
 
 // Builds the canal for `experiment` with every gate at its initial/operating opening and the

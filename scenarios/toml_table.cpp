@@ -7,13 +7,13 @@
 #include "scenarios/recording.hpp"
 
 namespace canalsim::scenarios {
-namespace {
-
 std::string format_value(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%g", v);
   return buffer;
 }
+
+namespace {
 
 std::string type_name(const toml::node& node) {
   switch (node.type()) {
@@ -58,7 +58,16 @@ void TomlTable::fail(const std::string& key, const std::string& what) const {
   throw InputError(where(node) + ": " + (key.empty() ? path_ : dotted(key)) + ": " + what);
 }
 
+void TomlTable::fail_value(const std::string& key, const std::string& value, const std::string& what) const {
+  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = " + value + ": " + what);
+}
+
 bool TomlTable::has(const std::string& key) const { return table_.contains(key); }
+
+bool TomlTable::is_string(const std::string& key) const {
+  const toml::node* node = table_.get(key);
+  return node && node->is_string();
+}
 
 const toml::node* TomlTable::find(const std::string& key) {
   used_.insert(key);

@@ -13,6 +13,9 @@
 
 namespace canalsim::scenarios {
 
+// A number as messages print it ("%g": 6 significant digits).
+std::string format_value(double v);
+
 // Inclusive or exclusive numeric range used in messages and checks.
 struct Range {
   double min;
@@ -37,6 +40,7 @@ class TomlTable {
   std::string choice(const std::string& key, const std::string& fallback,
                      std::initializer_list<const char*> allowed);
   bool has(const std::string& key) const;
+  bool is_string(const std::string& key) const;  // present and a string
   TomlTable table(const std::string& key);
   // An array of tables ([[key]]); empty when absent.
   std::vector<TomlTable> tables(const std::string& key);
@@ -46,6 +50,8 @@ class TomlTable {
   void reject_unknown_keys() const;
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  // "file:line: key = value: what" for a value that is valid alone but not in context.
+  [[noreturn]] void fail_value(const std::string& key, const std::string& value, const std::string& what) const;
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
 

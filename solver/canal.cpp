@@ -99,6 +99,7 @@ double Canal::compute_fluxes(double t) {
   for (Reach& r : reaches_) {
     const double smax = compute_interior_fluxes(r, settings, g);
     if (smax > 0.0) limit = std::min(limit, r.dx_ / smax);
+    if (!r.outlets_.empty()) r.update_outlets();  // level-dependent withdrawals of this stage
   }
   // The interior state extrapolated to an end face (the MUSCL face value; the cell average at
   // first order), so that the boundary sees the same depth as the cell's own reconstruction.

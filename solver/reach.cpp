@@ -1,5 +1,8 @@
 #include "solver/reach.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace canalsim::solver {
 
 Reach::Reach(const ReachSpec& spec)
@@ -26,6 +29,37 @@ double Reach::volume() const {
   double sum = 0.0;
   for (double a : area_) sum += a;
   return sum * dx_;
+}
+
+namespace {
+
+double orifice_discharge(const Reach::Outlet& o, double depth) {
+  return o.coefficient * std::sqrt(std::max(depth - o.invert_depth, 0.0));
+}
+
+}  // namespace
+
+int Reach::add_outlet(int cell, double coefficient, double invert_depth) {
+  outlets_.push_back({std::clamp(cell, 0, cells_ - 1), std::max(coefficient, 0.0), invert_depth, 0.0});
+  return static_cast<int>(outlets_.size()) - 1;
+}
+
+void Reach::set_outlet_coefficient(int k, double coefficient) {
+  outlets_.at(static_cast<std::size_t>(k)).coefficient = std::max(coefficient, 0.0);
+}
+
+double Reach::outlet_discharge(int k) const {
+  const Outlet& o = outlets_.at(static_cast<std::size_t>(k));
+  return orifice_discharge(o, depth(o.cell));
+}
+
+void Reach::update_outlets() {
+  for (Outlet& o : outlets_) {
+    const auto i = static_cast<std::size_t>(o.cell);
+    const double q = orifice_discharge(o, h_[i]);
+    lateral_inflow_[i] += (o.applied - q) / dx_;  // replaces the outlet's previous share
+    o.applied = q;
+  }
 }
 
 }  // namespace canalsim::solver

@@ -37,6 +37,25 @@ class Reach {
   std::vector<double>& lateral_inflow() { return lateral_inflow_; }
   const std::vector<double>& lateral_inflow() const { return lateral_inflow_; }
 
+  // Level-dependent lateral outlets (gravity orifices): outlet k withdraws
+  //   Q_k = K_k sqrt(max(h_cell - invert_k, 0))          [m³/s]
+  // from its cell, the orifice law Q = Cd A sqrt(2 g Δh) with the constant Cd A sqrt(2 g) = K_k
+  // (e.g. Henderson 1966, §6.2). The solver re-evaluates Q_k from each Runge–Kutta stage's depths
+  // (update_outlets, called by the Canal), adding it to lateral_inflow() as −Q_k/dx on top of
+  // what the caller put there, so steady-state solves and the volume balance see it.
+  struct Outlet {
+    int cell = 0;
+    double coefficient = 0.0;   // K [m^2.5/s], >= 0
+    double invert_depth = 0.0;  // invert height above the cell's bed [m]
+    double applied = 0.0;       // Q_k of the last evaluation [m³/s] (its share of lateral_inflow)
+  };
+  int add_outlet(int cell, double coefficient, double invert_depth);  // returns the index
+  const std::vector<Outlet>& outlets() const { return outlets_; }
+  void set_outlet_coefficient(int k, double coefficient);
+  double outlet_discharge(int k) const;  // Q_k for the current state [m³/s]
+  // Re-evaluates every outlet from the depths h_ of the current stage.
+  void update_outlets();
+
   double depth(int i) const { return section_.depth(area_[i]); }
   double level(int i) const { return bed_[i] + depth(i); }
   double volume() const;  // Σ A dx [m³]
@@ -51,6 +70,7 @@ class Reach {
   Section section_;
   double manning_n_;
   std::vector<double> area_, discharge_, bed_, lateral_inflow_;
+  std::vector<Outlet> outlets_;
   // Scheme work arrays (solver/scheme.cpp): start-of-step state, primitive variables, 1/A and
   // their limited slopes per cell, fluxes per face (cells + 1 faces; face f is left of cell f).
   std::vector<double> area0_, discharge0_;

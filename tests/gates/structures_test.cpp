@@ -200,5 +200,28 @@ TEST(GateLink, EqualLevelsGiveNoFlowAndAHeadDrivesTheLawsDischarge) {
   EXPECT_NEAR(f.mass, 0.08 * SluiceGate().discharge(hu, hd, 0.03), 1e-10);
 }
 
+// A pump at the end of a walled pool draws exactly its discharge while the intake is deeper than
+// the cut-out depth (volume falls linearly), and no more than the pool holds.
+TEST(PumpBoundary, DrawsItsDischargeAndCutsOutBeforeThePoolRunsDry) {
+  solver::Canal canal;
+  solver::ReachSpec spec;
+  spec.length = 20.0;
+  spec.cells = 20;
+  spec.section = {1.0, 1.5};
+  spec.initial_depth.assign(20, 0.5);
+  ASSERT_TRUE(canal.add_reach(spec));
+  auto pump = std::make_shared<PumpBoundary>(0.01, 0.1);
+  ASSERT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<solver::WallBoundary>()));
+  ASSERT_TRUE(canal.set_boundary(0, End::downstream, pump));
+  const double v0 = canal.reach(0).volume();
+  ASSERT_TRUE(canal.advance_to(100.0));
+  EXPECT_NEAR(v0 - canal.reach(0).volume(), 0.01 * 100.0, 1e-9);
+  EXPECT_NEAR(pump->last_discharge(), 0.01, 1e-12);
+  ASSERT_TRUE(canal.advance_to(20000.0));  // ~2 h of pumping would empty it: the cut-out stops it
+  EXPECT_GT(canal.reach(0).volume(), 0.0);
+  EXPECT_LT(pump->last_discharge(), 0.01);
+  EXPECT_LT(canal.total_balance().relative_error(), 1e-12);
+}
+
 }  // namespace
 }  // namespace canalsim::gates

@@ -1,0 +1,58 @@
+// Level-dependent outlets of a reach (solver/reach.hpp): a closed rectangular tank drained by an
+// orifice Q = K sqrt(h) follows the closed form of Torricelli's draining,
+//   A_s dh/dt = −K sqrt(h)  ⇒  sqrt(h(t)) = sqrt(h0) − K t / (2 A_s),
+// and the volume balance books the outlet as lateral outflow.
+#include <cmath>
+#include <gtest/gtest.h>
+#include <memory>
+
+#include "solver/canal.hpp"
+
+namespace canalsim::solver {
+namespace {
+
+// A 10 m reach of 10 cells, 1 m deep at rest, walls at both ends.
+void walled_tank(Canal& canal, const Section& section) {
+  ReachSpec spec;
+  spec.length = 10.0;
+  spec.cells = 10;
+  spec.section = section;
+  spec.initial_depth.assign(10, 1.0);
+  ASSERT_TRUE(canal.add_reach(spec));
+  ASSERT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<WallBoundary>()));
+  ASSERT_TRUE(canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>()));
+}
+
+TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
+  Canal canal;
+  walled_tank(canal, {1.0, 0.0});
+  const double k = 0.01;  // m^2.5/s: 10 L/s at 1 m, the tank (10 m²) falls ~1 mm/s
+  EXPECT_EQ(canal.reach(0).add_outlet(9, k, 0.0), 0);
+  ASSERT_TRUE(canal.advance_to(500.0));
+  // The tank is short (waves cross it in ~3 s): its level stays nearly flat while it drains. The
+  // outlet cell stands a little below the mean (the flow towards the outlet draws it down), so
+  // the tank drains slightly slower than the closed form: 0.26 mm of 0.56 m after 500 s.
+  const double expected_root = 1.0 - k * 500.0 / (2.0 * 10.0);
+  const double mean_depth = canal.reach(0).volume() / 10.0;
+  EXPECT_NEAR(mean_depth, expected_root * expected_root, 5e-4);
+  EXPECT_NEAR(canal.reach(0).outlet_discharge(0), k * std::sqrt(canal.reach(0).depth(9)), 1e-15);
+  const VolumeBalance b = canal.total_balance();
+  EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
+  EXPECT_LT(b.relative_error(), 1e-12);
+}
+
+TEST(Outlets, AChangedCoefficientTakesEffectAndZeroStopsTheOutlet) {
+  Canal canal;
+  walled_tank(canal, {1.0, 1.5});
+  canal.reach(0).add_outlet(0, 0.02, 0.2);
+  ASSERT_TRUE(canal.advance_to(10.0));
+  canal.reach(0).set_outlet_coefficient(0, 0.0);
+  ASSERT_TRUE(canal.advance_to(20.0));  // the first stage of this run removes the outlet's share
+  const double volume = canal.reach(0).volume();
+  ASSERT_TRUE(canal.advance_to(60.0));
+  EXPECT_NEAR(canal.reach(0).volume(), volume, 1e-12 * volume);
+  for (double q : canal.reach(0).lateral_inflow()) EXPECT_NEAR(q, 0.0, 1e-17);
+}
+
+}  // namespace
+}  // namespace canalsim::solver
