@@ -92,7 +92,8 @@ void Canal::restore_start_state() {
 
 double Canal::compute_fluxes(double t) {
   const double g = options_.gravity;
-  const StageSettings settings{options_.order == SpatialOrder::second, options_.limiter_theta,
+  const StageSettings settings{options_.order == SpatialOrder::second,
+                               options_.limiter == Limiter::van_leer, options_.limiter_theta,
                                options_.dry_depth};
   double limit = std::numeric_limits<double>::infinity();
   // Interior faces of every reach first: the end faces need the primitives of neighbours.

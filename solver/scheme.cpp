@@ -45,12 +45,20 @@ struct ReachKernels {
     }
     if (s.second_order) {
       const double th = s.theta;
-      // End cells keep zero slopes (first order next to boundaries and links).
+      if (s.van_leer) {
 #pragma omp simd
-      for (int i = 1; i < n - 1; ++i) {
-        dh[i] = limited_slope(h[i - 1], h[i], h[i + 1], th);
-        deta[i] = limited_slope(eta[i - 1], eta[i], eta[i + 1], th);
-        du[i] = limited_slope(u[i - 1], u[i], u[i + 1], th);
+        for (int i = 1; i < n - 1; ++i) {
+          dh[i] = van_leer_slope(h[i - 1], h[i], h[i + 1]);
+          deta[i] = van_leer_slope(eta[i - 1], eta[i], eta[i + 1]);
+          du[i] = van_leer_slope(u[i - 1], u[i], u[i + 1]);
+        }
+      } else {
+#pragma omp simd
+        for (int i = 1; i < n - 1; ++i) {
+          dh[i] = limited_slope(h[i - 1], h[i], h[i + 1], th);
+          deta[i] = limited_slope(eta[i - 1], eta[i], eta[i + 1], th);
+          du[i] = limited_slope(u[i - 1], u[i], u[i + 1], th);
+        }
       }
       // End cells: the one-sided difference towards the interior when both cells are wet (so the
       // boundary face sees a second-order state and a bed extrapolated to the end, which keeps
