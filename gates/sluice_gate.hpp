@@ -131,6 +131,17 @@ class SluiceGate {
   // Discharge, analytic partial derivatives, regime and direction.
   GateFlow evaluate(double y1, double y3, double a) const;
 
+  // What a face solve can reuse between evaluations: it varies one depth while the other and the
+  // opening stay fixed, so either the free discharge (fixed upstream depth, head gate) or the
+  // regime border (fixed tailwater, tail gate) is the same at every evaluation; each costs a `pow`.
+  // Entries are keyed on their exact arguments, so results are bit-identical with and without a
+  // memo. One memo per solve (a local variable): it is not thread-safe to share.
+  struct Memo {
+    double free_y1 = -1.0, free_a = -1.0, free_q = 0.0, free_d_y1 = 0.0, free_d_a = 0.0;
+    double border_y3 = -1.0, border_a = -1.0, border = 0.0;
+  };
+  GateFlow evaluate(double y1, double y3, double a, Memo& memo) const;
+
   // Opening ratio a / y_up above which the law sees a frozen opening (see the header comment).
   double critical_opening_ratio() const { return cap_ratio_; }
   // Whether the (scaled) law reaches critical flow continuously; false means q jumps when the
@@ -142,7 +153,7 @@ class SluiceGate {
   struct Partials {
     double q = 0.0, d_y1 = 0.0, d_y3 = 0.0, d_a = 0.0;
   };
-  Partials forward(double y1, double y3, double a, GateRegime& regime) const;
+  Partials forward(double y1, double y3, double a, GateRegime& regime, Memo* memo) const;
   Partials free_flow(double y1, double a_seen) const;
 
   SluiceGateOptions options_;
