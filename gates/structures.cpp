@@ -119,8 +119,8 @@ double branch_depth(const Section& s, double g, End end, double w) {
 // below 1e-13 h, or below 1e-8 h after a step it squared (|Δ_k| <= 10 Δ_{k-1}² / h): convergence
 // is then quadratic and the error left after it is ~Δ_k²/h <= 1e-16 h, one more evaluation would
 // only confirm it.
-std::optional<double> newton_from_guess(const std::function<double(double, double*)>& residual,
-                                        double branch, double guess) {
+template <class Residual>
+std::optional<double> newton_from_guess(const Residual& residual, double branch, double guess) {
   if (!(guess > branch)) return std::nullopt;
   double h = guess;
   double previous_step = INFINITY;
@@ -147,7 +147,8 @@ std::optional<double> solve_face_depth(const Section& section, double gravity, E
   // R(h) = allowed(h) - law(h) is monotone on the subcritical branch: increasing at the upstream
   // end (allowed grows with h, the law falls as the tailwater rises), decreasing downstream.
   const double sign = end == End::upstream ? 1.0 : -1.0;
-  const std::function<double(double, double*)> residual = [&](double h, double* slope) {
+  // A plain lambda, not a std::function: this runs four times per time step.
+  const auto residual = [&](double h, double* slope) {
     const Allowed a = allowed_discharge(section, gravity, end, w, h);
     const LawValue l = discharge_law(h);
     if (slope) *slope = sign * (a.dq_dh - l.dq_dh);
@@ -269,14 +270,20 @@ Flux HeadGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double a = operation_->opening(in.time);
   // The supply level and the opening are fixed during the solve: the memo keeps the free
   // discharge; the last evaluation gives the discharge at the root (below).
-  SluiceGate::Memo memo;
-  double last_h = -1.0;
-  coupling::LawValue last{0.0, 0.0};
-  auto law = [&](double h) {
-    const GateFlow f = law_.evaluate(y1, h, a, memo);
-    last_h = h;
-    last = coupling::LawValue{width_ * f.q, width_ * f.dq_dy3};
-    return last;
+  // Everything the law needs in one local, so that the lambda (one pointer) fits in the
+  // std::function's small buffer: no allocation per solve.
+  struct {
+    const HeadGateBoundary* gate;
+    double y1, a;
+    SluiceGate::Memo memo;
+    double last_h = -1.0;
+    coupling::LawValue last{0.0, 0.0};
+  } c{this, y1, a, {}};
+  auto law = [p = &c](double h) {
+    const GateFlow f = p->gate->law_.evaluate(p->y1, h, p->a, p->memo);
+    p->last_h = h;
+    p->last = coupling::LawValue{p->gate->width_ * f.q, p->gate->width_ * f.dq_dy3};
+    return p->last;
   };
   const auto h = coupling::solve_face_depth(in.section, in.gravity, End::upstream, in.cell, law,
                                             warm_depth_);
@@ -284,7 +291,7 @@ Flux HeadGateBoundary::flux(const solver::BoundaryInput& in) const {
   warm_depth_ = *h;
   // The root is the last Newton step from last_h: within 1e-8 h of it, the discharge there to
   // second order in the step (~1e-16 relative) without another evaluation.
-  const double q = std::abs(*h - last_h) <= 1e-8 * *h ? last.q + last.dq_dh * (*h - last_h) : law(*h).q;
+  const double q = std::abs(*h - c.last_h) <= 1e-8 * *h ? c.last.q + c.last.dq_dh * (*h - c.last_h) : law(*h).q;
   Flux f = face_flux_with_speed(in.section, in.gravity, *h, q);
   add_jet(f, in.section, in.gravity, q, y1);
   return f;
@@ -307,20 +314,24 @@ Flux TailGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double y3 = tail_level_(in.time);
   const double a = operation_->opening(in.time);
   // Tail level and opening fixed during the solve: the memo keeps the regime border.
-  SluiceGate::Memo memo;
-  double last_h = -1.0;
-  coupling::LawValue last{0.0, 0.0};
-  auto law = [&](double h) {
-    const GateFlow f = law_.evaluate(h, y3, a, memo);
-    last_h = h;
-    last = coupling::LawValue{width_ * f.q, width_ * f.dq_dy1};
-    return last;
+  struct {
+    const TailGateBoundary* gate;
+    double y3, a;
+    SluiceGate::Memo memo;
+    double last_h = -1.0;
+    coupling::LawValue last{0.0, 0.0};
+  } c{this, y3, a, {}};
+  auto law = [p = &c](double h) {  // one pointer: no allocation in the std::function
+    const GateFlow f = p->gate->law_.evaluate(h, p->y3, p->a, p->memo);
+    p->last_h = h;
+    p->last = coupling::LawValue{p->gate->width_ * f.q, p->gate->width_ * f.dq_dy1};
+    return p->last;
   };
   const auto h = coupling::solve_face_depth(in.section, in.gravity, End::downstream, in.cell, law,
                                             warm_depth_);
   if (!h) return critical_face_flux(in.section, in.gravity, End::downstream, in.cell);
   warm_depth_ = *h;
-  const double q = std::abs(*h - last_h) <= 1e-8 * *h ? last.q + last.dq_dh * (*h - last_h) : law(*h).q;
+  const double q = std::abs(*h - c.last_h) <= 1e-8 * *h ? c.last.q + c.last.dq_dh * (*h - c.last_h) : law(*h).q;
   return face_flux_with_speed(in.section, in.gravity, *h, q);
 }
 
