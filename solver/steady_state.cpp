@@ -413,7 +413,7 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
   if (flag == KIN_SUCCESS) flag = KINSetErrHandlerFn(kin.get(), silent, nullptr);  // we report
   if (flag == KIN_SUCCESS) flag = KINSetLinearSolver(kin.get(), ls, J);
   if (flag == KIN_SUCCESS) flag = KINSetJacFn(kin.get(), jacobian);
-  // Modified Newton from the shooting guess: the first Jacobian serves several iterations (each
+  // Modified Newton from the shooting guess: one Jacobian serves up to 3 iterations (each
   // then costs one residual instead of 2·kColours + 1; KINSOL re-evaluates it when the line search
   // stalls). From any other start a fresh Jacobian every iteration: far from the solution a stale
   // one took 35 iterations where Newton takes 9.

@@ -28,7 +28,7 @@ struct SteadyStateOptions {
   // Newton iterations per Jacobian evaluation (KINSetMaxSetupCalls) when Newton starts from the
   // shooting guess, range [1, 100]: 1 is Newton's method, more is modified Newton (a Jacobian
   // costs 2·5 residual evaluations). From any other start every iteration gets a fresh Jacobian.
-  int iterations_per_jacobian = 10;
+  int iterations_per_jacobian = 3;
   Status validate() const;
 };
 
