@@ -310,4 +310,17 @@ GateFlow SluiceGate::evaluate(double y1, double y3, double a, Memo& memo) const 
   return flow;
 }
 
+FaceLaw::Value FaceLaw::operator()(double h) {
+  const GateFlow f = face_upstream_ ? law_->evaluate(h, fixed_, opening_, memo_)
+                                    : law_->evaluate(fixed_, h, opening_, memo_);
+  last_depth_ = h;
+  last_ = {width_ * f.q, width_ * (face_upstream_ ? f.dq_dy1 : f.dq_dy3)};
+  return last_;
+}
+
+double FaceLaw::discharge_at(double root) {
+  if (std::abs(root - last_depth_) <= 1e-8 * root) return last_.q + last_.dq_dh * (root - last_depth_);
+  return (*this)(root).q;
+}
+
 }  // namespace canalsim::gates

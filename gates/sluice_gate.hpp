@@ -161,4 +161,34 @@ class SluiceGate {
   bool reaches_critical_ = true;
 };
 
+// The gate law as one face solve sees it: the depth on one side of the gate varies (the face depth
+// of the pool the gate closes), the other depth and the opening are fixed for the whole solve. It
+// keeps the memo of the fixed terms and the last evaluation, from which discharge_at() gives the
+// discharge at the root without evaluating again when the root is within 1e-8 h of it (the last
+// Newton step: the linear extrapolation is exact to ~1e-16 relative). One per solve.
+class FaceLaw {
+ public:
+  // `face_is_upstream_side`: the varying depth is y1 (a gate at the downstream end of its pool);
+  // otherwise it is y3 (a head gate fed from a supply at y1 = fixed_depth). Discharges in m³/s.
+  FaceLaw(const SluiceGate& law, double width, bool face_is_upstream_side, double fixed_depth,
+          double opening)
+      : law_(&law), width_(width), face_upstream_(face_is_upstream_side), fixed_(fixed_depth),
+        opening_(opening) {}
+  struct Value {
+    double q;      // [m³/s]
+    double dq_dh;  // d q / d(face depth) [m²/s]
+  };
+  Value operator()(double face_depth);
+  double discharge_at(double root);
+
+ private:
+  const SluiceGate* law_;
+  double width_;
+  bool face_upstream_;
+  double fixed_, opening_;
+  SluiceGate::Memo memo_;
+  double last_depth_ = -1.0;
+  Value last_{0.0, 0.0};
+};
+
 }  // namespace canalsim::gates

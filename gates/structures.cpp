@@ -268,30 +268,18 @@ HeadGateBoundary::HeadGateBoundary(const GateGeometry& geometry, std::shared_ptr
 Flux HeadGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double y1 = supply_->level(in.time);
   const double a = operation_->opening(in.time);
-  // The supply level and the opening are fixed during the solve: the memo keeps the free
-  // discharge; the last evaluation gives the discharge at the root (below).
-  // Everything the law needs in one local, so that the lambda (one pointer) fits in the
-  // std::function's small buffer: no allocation per solve.
-  struct {
-    const HeadGateBoundary* gate;
-    double y1, a;
-    SluiceGate::Memo memo;
-    double last_h = -1.0;
-    coupling::LawValue last{0.0, 0.0};
-  } c{this, y1, a, {}};
-  auto law = [p = &c](double h) {
-    const GateFlow f = p->gate->law_.evaluate(p->y1, h, p->a, p->memo);
-    p->last_h = h;
-    p->last = coupling::LawValue{p->gate->width_ * f.q, p->gate->width_ * f.dq_dy3};
-    return p->last;
+  // The supply level and the opening are fixed during the solve (FaceLaw keeps the free
+  // discharge); the lambda captures one pointer, so its std::function needs no allocation.
+  FaceLaw face_law(law_, width_, false, y1, a);
+  auto law = [p = &face_law](double h) {
+    const FaceLaw::Value v = (*p)(h);
+    return coupling::LawValue{v.q, v.dq_dh};
   };
   const auto h = coupling::solve_face_depth(in.section, in.gravity, End::upstream, in.cell, law,
                                             warm_depth_);
   if (!h) return critical_face_flux(in.section, in.gravity, End::upstream, in.cell);
   warm_depth_ = *h;
-  // The root is the last Newton step from last_h: within 1e-8 h of it, the discharge there to
-  // second order in the step (~1e-16 relative) without another evaluation.
-  const double q = std::abs(*h - c.last_h) <= 1e-8 * *h ? c.last.q + c.last.dq_dh * (*h - c.last_h) : law(*h).q;
+  const double q = face_law.discharge_at(*h);
   Flux f = face_flux_with_speed(in.section, in.gravity, *h, q);
   add_jet(f, in.section, in.gravity, q, y1);
   return f;
@@ -313,25 +301,17 @@ TailGateBoundary::TailGateBoundary(const GateGeometry& geometry, TimeSignal tail
 Flux TailGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double y3 = tail_level_(in.time);
   const double a = operation_->opening(in.time);
-  // Tail level and opening fixed during the solve: the memo keeps the regime border.
-  struct {
-    const TailGateBoundary* gate;
-    double y3, a;
-    SluiceGate::Memo memo;
-    double last_h = -1.0;
-    coupling::LawValue last{0.0, 0.0};
-  } c{this, y3, a, {}};
-  auto law = [p = &c](double h) {  // one pointer: no allocation in the std::function
-    const GateFlow f = p->gate->law_.evaluate(h, p->y3, p->a, p->memo);
-    p->last_h = h;
-    p->last = coupling::LawValue{p->gate->width_ * f.q, p->gate->width_ * f.dq_dy1};
-    return p->last;
+  // Tail level and opening fixed during the solve (FaceLaw keeps the regime border).
+  FaceLaw face_law(law_, width_, true, y3, a);
+  auto law = [p = &face_law](double h) {
+    const FaceLaw::Value v = (*p)(h);
+    return coupling::LawValue{v.q, v.dq_dh};
   };
   const auto h = coupling::solve_face_depth(in.section, in.gravity, End::downstream, in.cell, law,
                                             warm_depth_);
   if (!h) return critical_face_flux(in.section, in.gravity, End::downstream, in.cell);
   warm_depth_ = *h;
-  const double q = std::abs(*h - c.last_h) <= 1e-8 * *h ? c.last.q + c.last.dq_dh * (*h - c.last_h) : law(*h).q;
+  const double q = face_law.discharge_at(*h);
   return face_flux_with_speed(in.section, in.gravity, *h, q);
 }
 
