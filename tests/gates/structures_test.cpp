@@ -99,15 +99,23 @@ struct Flume {
   }
 };
 
+// Runs the flume to `settle` s, then samples the head-gate discharge every 0.13 s for 26 s:
+// returns its smallest and largest value.
+void sampled_discharge_range(Flume& flume, double settle, double* lo, double* hi) {
+  *lo = INFINITY;
+  *hi = -INFINITY;
+  ASSERT_TRUE(flume.canal.advance_to(settle));
+  for (int k = 1; k <= 200; ++k) {
+    ASSERT_TRUE(flume.canal.advance_to(settle + 0.13 * k));
+    *lo = std::min(*lo, flume.head->last_discharge());
+    *hi = std::max(*hi, flume.head->last_discharge());
+  }
+}
+
 TEST(GateCoupling, SteadyGateDischargeDoesNotChatter) {
   Flume flume(std::make_shared<GateOperation>(0.025, 0.05));
-  ASSERT_TRUE(flume.canal.advance_to(900.0));
-  double lo = INFINITY, hi = -INFINITY;
-  for (int k = 1; k <= 200; ++k) {
-    ASSERT_TRUE(flume.canal.advance_to(900.0 + 0.13 * k));
-    lo = std::min(lo, flume.head->last_discharge());
-    hi = std::max(hi, flume.head->last_discharge());
-  }
+  double lo = 0.0, hi = 0.0;
+  sampled_discharge_range(flume, 900.0, &lo, &hi);
   EXPECT_GT(lo, 0.0);
   EXPECT_LT((hi - lo) / hi, 1e-6) << "head-gate discharge varies between " << lo << " and " << hi;
   EXPECT_NEAR(flume.tail->last_discharge(), flume.head->last_discharge(), 1e-6 * hi);
@@ -120,13 +128,8 @@ TEST(GateCoupling, SteadyGateDischargeSettlesAtCourantNumber08) {
   options.cfl = 0.8;
   Flume flume(std::make_shared<GateOperation>(0.025, 0.05), 0.05,
               std::make_shared<FixedLevelSupply>(0.060), 0.0225, 0.042, options);
-  ASSERT_TRUE(flume.canal.advance_to(600.0));
-  double lo = INFINITY, hi = -INFINITY;
-  for (int k = 1; k <= 200; ++k) {
-    ASSERT_TRUE(flume.canal.advance_to(600.0 + 0.13 * k));
-    lo = std::min(lo, flume.head->last_discharge());
-    hi = std::max(hi, flume.head->last_discharge());
-  }
+  double lo = 0.0, hi = 0.0;
+  sampled_discharge_range(flume, 600.0, &lo, &hi);
   EXPECT_GT(lo, 0.0);
   EXPECT_LT((hi - lo) / hi, 1e-10) << "head-gate discharge varies between " << lo << " and " << hi;
 }
