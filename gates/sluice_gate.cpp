@@ -174,7 +174,8 @@ SluiceGate::Partials SluiceGate::free_flow(double y1, double a) const {
 }
 
 // Flow from side 1 (the higher one, y1 >= y3) to side 3; partials in (y1, y3, raw opening a).
-SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateRegime& regime) const {
+SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateRegime& regime,
+                                         Memo* memo) const {
   Partials out;
   const double geometric = std::max(a, 0.0) + options_.leakage_opening;
   const double dgeometric_da = a > 0.0 ? 1.0 : 0.0;
@@ -195,7 +196,21 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
     qf = critical_discharge(y1, options_.gravity);  // jump documented in the header
     dqf_dy1 = 1.5 * qf / y1;
   } else {
-    const Partials f = free_flow(y1, a_seen);
+    Partials f;
+    if (memo && memo->free_y1 == y1 && memo->free_a == a_seen) {
+      f.q = memo->free_q;
+      f.d_y1 = memo->free_d_y1;
+      f.d_a = memo->free_d_a;
+    } else {
+      f = free_flow(y1, a_seen);
+      if (memo) {
+        memo->free_y1 = y1;
+        memo->free_a = a_seen;
+        memo->free_q = f.q;
+        memo->free_d_y1 = f.d_y1;
+        memo->free_d_a = f.d_a;
+      }
+    }
     qf = f.q;
     dqf_dy1 = f.d_y1 + f.d_a * dseen_dy1;
     dqf_da = f.d_a * dseen_da;
@@ -206,7 +221,17 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   // zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
   // the discharge falls continuously to zero. The paper's regime classification
   // (classify_regime) keeps the published condition.
-  const double y_lc_swamee = limit_condition_level(y3, a_seen);
+  double y_lc_swamee;
+  if (memo && memo->border_y3 == y3 && memo->border_a == a_seen) {
+    y_lc_swamee = memo->border;
+  } else {
+    y_lc_swamee = limit_condition_level(y3, a_seen);
+    if (memo) {
+      memo->border_y3 = y3;
+      memo->border_a = a_seen;
+      memo->border = y_lc_swamee;
+    }
+  }
   const bool floored = zero_head_border_ratio * y3 > y_lc_swamee;
   const double y_lc = floored ? zero_head_border_ratio * y3 : y_lc_swamee;
   if (y1 > y_lc) {  // condition (8): free flow
@@ -241,9 +266,11 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const double F = D / den;
   const double dF_dD = submergence_weight * S / (den * den);
   const double dF_dS = -submergence_weight * D / (den * den);
-  const double dD_dhead = submergence_exponent * floored_power(head, submergence_exponent - 1.0, floor);
-  const double dS_dmargin =
-      submergence_exponent * floored_power(margin, submergence_exponent - 1.0, floor);
+  // x^-0.3 = x^0.7 / x reuses D and S (two pow fewer); below the floor the slope is floored.
+  const double dD_dhead = submergence_exponent *
+      (head > floor ? D / head : floored_power(head, submergence_exponent - 1.0, floor));
+  const double dS_dmargin = submergence_exponent *
+      (margin > floor ? S / margin : floored_power(margin, submergence_exponent - 1.0, floor));
   const double dylc_dy3 = floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;
   const double dylc_dseen = floored ? 0.0 : -border_exponent * y_lc / a_seen;
 
@@ -259,10 +286,15 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
 }
 
 GateFlow SluiceGate::evaluate(double y1, double y3, double a) const {
+  Memo none;
+  return evaluate(y1, y3, a, none);
+}
+
+GateFlow SluiceGate::evaluate(double y1, double y3, double a, Memo& memo) const {
   GateFlow flow;
   flow.reverse = y3 > y1;
   if (!flow.reverse) {
-    const Partials p = forward(y1, y3, a, flow.regime);
+    const Partials p = forward(y1, y3, a, flow.regime, &memo);
     flow.q = p.q;
     flow.dq_dy1 = p.d_y1;
     flow.dq_dy3 = p.d_y3;
@@ -270,12 +302,25 @@ GateFlow SluiceGate::evaluate(double y1, double y3, double a) const {
     return flow;
   }
   // Reverse head: q(y1, y3, a) = -Q(y3, y1, a), so the roles of the partials swap too.
-  const Partials p = forward(y3, y1, a, flow.regime);
+  const Partials p = forward(y3, y1, a, flow.regime, &memo);
   flow.q = -p.q;
   flow.dq_dy1 = -p.d_y3;
   flow.dq_dy3 = -p.d_y1;
   flow.dq_da = -p.d_a;
   return flow;
+}
+
+FaceLaw::Value FaceLaw::operator()(double h) {
+  const GateFlow f = face_upstream_ ? law_->evaluate(h, fixed_, opening_, memo_)
+                                    : law_->evaluate(fixed_, h, opening_, memo_);
+  last_depth_ = h;
+  last_ = {width_ * f.q, width_ * (face_upstream_ ? f.dq_dy1 : f.dq_dy3)};
+  return last_;
+}
+
+double FaceLaw::discharge_at(double root) {
+  if (std::abs(root - last_depth_) <= 1e-8 * root) return last_.q + last_.dq_dh * (root - last_depth_);
+  return (*this)(root).q;
 }
 
 }  // namespace canalsim::gates

@@ -131,6 +131,17 @@ class SluiceGate {
   // Discharge, analytic partial derivatives, regime and direction.
   GateFlow evaluate(double y1, double y3, double a) const;
 
+  // What a face solve can reuse between evaluations: it varies one depth while the other and the
+  // opening stay fixed, so either the free discharge (fixed upstream depth, head gate) or the
+  // regime border (fixed tailwater, tail gate) is the same at every evaluation; each costs a `pow`.
+  // Entries are keyed on their exact arguments, so results are bit-identical with and without a
+  // memo. One memo per solve (a local variable): it is not thread-safe to share.
+  struct Memo {
+    double free_y1 = -1.0, free_a = -1.0, free_q = 0.0, free_d_y1 = 0.0, free_d_a = 0.0;
+    double border_y3 = -1.0, border_a = -1.0, border = 0.0;
+  };
+  GateFlow evaluate(double y1, double y3, double a, Memo& memo) const;
+
   // Opening ratio a / y_up above which the law sees a frozen opening (see the header comment).
   double critical_opening_ratio() const { return cap_ratio_; }
   // Whether the (scaled) law reaches critical flow continuously; false means q jumps when the
@@ -142,12 +153,42 @@ class SluiceGate {
   struct Partials {
     double q = 0.0, d_y1 = 0.0, d_y3 = 0.0, d_a = 0.0;
   };
-  Partials forward(double y1, double y3, double a, GateRegime& regime) const;
+  Partials forward(double y1, double y3, double a, GateRegime& regime, Memo* memo) const;
   Partials free_flow(double y1, double a_seen) const;
 
   SluiceGateOptions options_;
   double cap_ratio_ = 1.0;
   bool reaches_critical_ = true;
+};
+
+// The gate law as one face solve sees it: the depth on one side of the gate varies (the face depth
+// of the pool the gate closes), the other depth and the opening are fixed for the whole solve. It
+// keeps the memo of the fixed terms and the last evaluation, from which discharge_at() gives the
+// discharge at the root without evaluating again when the root is within 1e-8 h of it (the last
+// Newton step: the linear extrapolation is exact to ~1e-16 relative). One per solve.
+class FaceLaw {
+ public:
+  // `face_is_upstream_side`: the varying depth is y1 (a gate at the downstream end of its pool);
+  // otherwise it is y3 (a head gate fed from a supply at y1 = fixed_depth). Discharges in m³/s.
+  FaceLaw(const SluiceGate& law, double width, bool face_is_upstream_side, double fixed_depth,
+          double opening)
+      : law_(&law), width_(width), face_upstream_(face_is_upstream_side), fixed_(fixed_depth),
+        opening_(opening) {}
+  struct Value {
+    double q;      // [m³/s]
+    double dq_dh;  // d q / d(face depth) [m²/s]
+  };
+  Value operator()(double face_depth);
+  double discharge_at(double root);
+
+ private:
+  const SluiceGate* law_;
+  double width_;
+  bool face_upstream_;
+  double fixed_, opening_;
+  SluiceGate::Memo memo_;
+  double last_depth_ = -1.0;
+  Value last_{0.0, 0.0};
 };
 
 }  // namespace canalsim::gates

@@ -92,7 +92,8 @@ void Canal::restore_start_state() {
 
 double Canal::compute_fluxes(double t) {
   const double g = options_.gravity;
-  const StageSettings settings{options_.order == SpatialOrder::second, options_.limiter_theta,
+  const StageSettings settings{options_.order == SpatialOrder::second,
+                               options_.limiter == Limiter::van_leer, options_.limiter_theta,
                                options_.dry_depth};
   double limit = std::numeric_limits<double>::infinity();
   // Interior faces of every reach first: the end faces need the primitives of neighbours.
@@ -384,13 +385,26 @@ void Canal::evaluate_rates(double t, std::vector<double>& rates) {
       double dq = -(r.face_momentum_left_[i + 1] - r.face_momentum_right_[i] - source) / r.dx_ +
                   std::min(qlat, 0.0) * r.u_[i];
       if (wet && friction > 0.0 && a > 0.0) {
-        const double hydraulic_radius = a / s.wetted_perimeter(r.h_[i]);
-        dq -= friction * std::abs(q) * q / (a * std::pow(hydraulic_radius, 4.0 / 3.0));
+        // The update's formula (scheme.cpp), k = g n² |Q| ρ^{4/3} / A with ρ = P/A = 1/R and the
+        // same inverse cube root, so that L(U) = 0 is a fixed point of a step to round-off.
+        const double rho = s.wetted_perimeter(r.h_[i]) * r.inv_area_[i];
+        const double rho_m13 = inverse_cube_root_positive(rho);
+        const double rho43 = rho * rho * (rho_m13 * rho_m13);
+        dq -= friction * std::abs(q) * rho43 * r.inv_area_[i] * q;
       }
       rates[2 * c] = -(r.face_mass_[i + 1] - r.face_mass_[i]) / r.dx_ + qlat;
       rates[2 * c + 1] = dq;
     }
   }
+}
+
+bool Canal::boundary_flux(int ri, End end, const InteriorState& cell, double t, Flux* out) const {
+  if (ri < 0 || ri >= reach_count()) return false;
+  const auto& c = (end == End::upstream ? upstream_ends_ : downstream_ends_)[static_cast<std::size_t>(ri)];
+  if (!c.boundary) return false;
+  const Reach& r = reaches_[static_cast<std::size_t>(ri)];
+  *out = c.boundary->flux({end, cell, r.section_, options_.gravity, t, r.dx_});
+  return true;
 }
 
 void Canal::reset_balance() {

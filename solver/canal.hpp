@@ -119,6 +119,10 @@ class Canal {
   // solver, solver/steady_state.hpp).
   void evaluate_rates(double t, std::vector<double>& rates);
   int total_cells() const;
+  // The flux the boundary at `end` of `reach` returns at time t for an adjacent face state `cell`
+  // (the steady-state solver's first guess asks it). False, and *out untouched, when that end is
+  // joined by a link or has no boundary. Advances no boundary state.
+  bool boundary_flux(int reach, End end, const InteriorState& cell, double t, Flux* out) const;
 
  private:
   struct EndConnection {

@@ -41,6 +41,8 @@ Status validate(const SolverOptions& o) {
   if (!(o.cfl > 0.0 && o.cfl <= 1.0)) return Status::error(describe("SolverOptions::cfl", o.cfl, "(0, 1]"));
   if (o.order != SpatialOrder::first && o.order != SpatialOrder::second)
     return Status::error("SolverOptions::order must be SpatialOrder::first or SpatialOrder::second");
+  if (o.limiter != Limiter::van_leer && o.limiter != Limiter::generalised_minmod)
+    return Status::error("SolverOptions::limiter must be Limiter::van_leer or Limiter::generalised_minmod");
   if (!(o.limiter_theta >= 1.0 && o.limiter_theta <= 2.0))
     return Status::error(describe("SolverOptions::limiter_theta", o.limiter_theta, "[1, 2]"));
   if (!(o.gravity > 0.0 && std::isfinite(o.gravity)))
