@@ -219,6 +219,8 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     auto n = root.table("numerics");
     s.numerics.cfl = n.number("cfl", s.numerics.cfl, {0.0, 1.0, true}, "");
     s.numerics.order = n.integer("order", s.numerics.order, 1, 2);
+    s.numerics.van_leer_limiter =
+        n.choice("limiter", s.numerics.van_leer_limiter ? "van_leer" : "minmod", {"van_leer", "minmod"}) == "van_leer";
     s.numerics.dry_depth_m = n.number("dry_depth_m", s.numerics.dry_depth_m, {0.0, 1.0, true}, "m");
     s.numerics.steady_tolerance_m = n.number("steady_tolerance_m", s.numerics.steady_tolerance_m, {0.0, 1.0, true}, "m");
     n.reject_unknown_keys();
