@@ -33,20 +33,6 @@ std::string format(double v) {
   return out.str();
 }
 
-// The leading n samples of an experiment (the part the models are fitted on).
-ExperimentData head(const ExperimentData& d, std::size_t n) {
-  ExperimentData h = d;
-  auto cut = [n](std::vector<double>& v) {
-    if (v.size() > n) v.resize(n);
-  };
-  cut(h.t_s);
-  cut(h.u_mm);
-  cut(h.y_dwe_mm);
-  cut(h.y_up_mm);
-  cut(h.x_up_mm);
-  return h;
-}
-
 // Free-flow share of the samples by the paper's condition (8), with the gate position where it
 // was recorded and the command otherwise.
 double free_share(const std::vector<ExperimentData>& data) {
@@ -98,7 +84,7 @@ class ModelEngine {
       s.n_fit = static_cast<std::size_t>(std::round(o.fit_fraction * static_cast<double>(s.n)));
       s.warm = std::min(s.n_fit / 2, static_cast<std::size_t>(std::ceil(o.warmup_s / d.h - 1e-9)));
       split_.push_back(s);
-      heads_.push_back(head(d, s.n_fit));
+      heads_.push_back(reduced::leading_samples(d, s.n_fit));
     }
     fit_options_.actuation.quantum_mm = o.quantum_mm;
     fit_options_.actuation.gate_speed_mm_s = o.gate_speed_mm_s;

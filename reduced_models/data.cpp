@@ -92,4 +92,12 @@ void require_upstream_level(const ExperimentData& data, const std::string& model
   }
 }
 
+ExperimentData leading_samples(const ExperimentData& data, std::size_t n) {
+  ExperimentData out = data;
+  for (auto* v : {&out.t_s, &out.u_mm, &out.y_dwe_mm, &out.y_up_mm, &out.x_up_mm}) {
+    if (v->size() > n) v->resize(n);
+  }
+  return out;
+}
+
 }  // namespace canalsim::reduced

@@ -50,6 +50,9 @@ struct ExperimentData {
 // the recording when the input has no excitation or the options do not fit the data.
 ExperimentData prepare_data(const Recording& recording, const DataOptions& options = {});
 
+// The first `n` samples of an experiment (all of it when shorter), operating point unchanged.
+ExperimentData leading_samples(const ExperimentData& data, std::size_t n);
+
 // Reads a recording and prepares it (the everyday entry point for files).
 ExperimentData load_experiment(const std::string& file, const DataOptions& options = {});
 

@@ -442,19 +442,6 @@ class Problem {
   std::vector<double> values_, weights_;
 };
 
-// The first `n` samples of an experiment.
-ExperimentData truncated(const ExperimentData& d, std::size_t n) {
-  ExperimentData out = d;
-  auto cut = [n](std::vector<double>& v) {
-    if (v.size() > n) v.resize(n);
-  };
-  cut(out.t_s);
-  cut(out.u_mm);
-  cut(out.y_dwe_mm);
-  cut(out.y_up_mm);
-  cut(out.x_up_mm);
-  return out;
-}
 
 void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>& data,
                         const FitOptions& options) {
@@ -577,7 +564,7 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
     return fit_searching(kind, data, options);
   }
   std::vector<ExperimentData> heads;
-  for (const auto* d : data) heads.push_back(truncated(*d, options.coarse_samples));
+  for (const auto* d : data) heads.push_back(leading_samples(*d, options.coarse_samples));
   const FitResult head_fit = fit_searching(kind, pointers(heads), options);
   Problem whole(kind, data, options);
   double cost = 0.0;
