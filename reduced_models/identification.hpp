@@ -68,7 +68,7 @@ struct FitOptions {
   int hybrid_restarts = 3;           // the same for the hybrid model (its cost is rougher)
   // Records longer than twice this are first fitted on their leading `coarse_samples` samples
   // (delay grid and search), then polished on the whole record; 0 = always the whole record.
-  std::size_t coarse_samples = 2500;
+  std::size_t coarse_samples = 2048;
   // Head references H of the nonlinear models (mm); 0 = mean head of the fitted data.
   double head_ref_mm = 0.0;
   double head_ref_sub_mm = 0.0;
