@@ -154,9 +154,12 @@ std::optional<double> solve_face_depth(const Section& section, double gravity, E
     if (slope) *slope = sign * (a.dq_dh - l.dq_dh);
     return sign * (a.q - l.q);
   };
-  // Above the branch depth (h > branch_depth) the face is subcritical towards the outside; testing
-  // that directly spares the warm start the bisection for the branch depth.
+  // Above the branch depth (h > branch_depth) the face is subcritical towards the outside. For a
+  // rectangle that depth is closed-form; otherwise testing the speeds directly spares the warm
+  // start the bisection for it.
+  const double rectangular_branch = section.is_rectangular() ? branch_depth(section, gravity, end, w) : -1.0;
   const auto subcritical = [&](double h) {
+    if (rectangular_branch >= 0.0) return h > rectangular_branch;
     const Allowed a = allowed_discharge(section, gravity, end, w, h);
     return (end == End::downstream ? a.velocity - a.celerity : -a.velocity - a.celerity) <= 0.0;
   };
