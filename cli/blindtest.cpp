@@ -7,6 +7,7 @@
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "diagnosis/blindtest.hpp"
+#include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/recording.hpp"
 
@@ -23,6 +24,8 @@ struct BlindtestArguments {
   std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
   std::vector<std::string> effects;
   bool verbose = false;
+  std::string model;
+  double quantum_mm = 0.05;
 };
 
 void run(const BlindtestArguments& args) {
@@ -34,6 +37,15 @@ void run(const BlindtestArguments& args) {
   options.duration_s = args.duration;
   options.experiments = args.experiments;
   options.effects = args.effects;
+  if (!args.model.empty()) {
+    const auto kind = reduced::parse_model_kind(args.model);
+    if (!kind) throw InputError("--model " + args.model + ": expected one of liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid");
+    diagnosis::ModelDiagnoseOptions m;
+    m.kind = *kind;
+    m.quantum_mm = args.quantum_mm;
+    options.model = m;
+    if (options.effects.empty()) options.effects = {"gate_rate_limit", "sensor_quantization"};
+  }
   if (const std::string problem = options.validate(); !problem.empty()) throw InputError("blindtest: " + problem);
   Progress progress("blind test, " + std::to_string(args.trials) + " trials on " + std::to_string(args.threads) +
                     " threads");
@@ -69,6 +81,11 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial (default op1 op2 op3 op4)");
   cmd->add_option("--effects", args->effects, "Draw only these effects (and none); default the whole catalog");
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
+  cmd->add_option("--model", args->model,
+                  "Diagnose against this reduced model instead of the scenario (draws gate_rate_limit and "
+                  "sensor_quantization unless --effects says otherwise)");
+  cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm in the model (default 0.05)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->callback([args] { run(*args); });
 }
 

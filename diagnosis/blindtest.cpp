@@ -155,7 +155,7 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
           r.source = "trial" + std::to_string(i) + "/" + e.name;
           recordings.push_back(std::move(r));
         }
-        const Diagnosis d = diagnose(base, recordings, diagnose_options);
+        const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
         if (!d.ok) throw std::runtime_error(d.message);
         trial.verdict = d.verdict;
         trial.correct = trial.verdict == trial.truth.effect;

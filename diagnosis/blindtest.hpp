@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "diagnosis/diagnose.hpp"
+#include "diagnosis/model_diagnosis.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::diagnosis {
@@ -34,6 +36,10 @@ struct BlindtestOptions {
   std::vector<std::string> effects;
   bool include_none = true;
   DiagnoseOptions diagnose;         // its threads are set to 1: trials are the parallel unit
+  // When set, the recordings are diagnosed against this reduced model (diagnose_model) instead
+  // of the scenario; only the effects a reduced model can name make sense to draw then
+  // (gate_rate_limit, sensor_quantization).
+  std::optional<ModelDiagnoseOptions> model;
   std::function<void(int done, int total)> progress;
   [[nodiscard]] std::string validate() const;
 };

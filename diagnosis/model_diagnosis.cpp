@@ -297,10 +297,26 @@ EffectResult sensor_quantization(const ModelEngine& e) {
     return not_expressible("sensor_quantization",
                            "the recorded lattice (" + format(r) + " mm) is the modelled resolution");
   }
-  reduced::Actuation a = e.nominal().actuation;
-  a.quantum_mm = r;
-  const Model m = e.refit(a);
-  EffectResult res = e.judge("sensor_quantization", e.predict(m), 1, {"resolution", "mm", r, 0.0},
+  // The corrected prediction is the nominal model's level read by the coarser sensor: its
+  // expected reading given the model's own spread (catalog.hpp, expected_reading; docs/diagnosis.md
+  // §4), not the rounded level. (Refitting the model with the coarse rounding in its cost makes the
+  // cost piecewise flat and the fit worse, not better.)
+  Model m = e.nominal();
+  m.actuation.quantum_mm = 0.0;
+  Predictions p = e.predict(m);
+  double sq = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t k = e.splits()[i].warm; k < e.splits()[i].n_fit; ++k) {
+      sq += std::pow(e.data()[i].y_dwe_mm[k] - p[i][k], 2);
+      ++n;
+    }
+  }
+  const double spread = std::sqrt(std::max(sq / static_cast<double>(std::max<std::size_t>(n, 1)) - r * r / 12.0, 0.01 * r * r));
+  for (auto& series : p) {
+    for (double& y : series) y = expected_reading(y, r, spread);
+  }
+  EffectResult res = e.judge("sensor_quantization", p, 1, {"resolution", "mm", r, 0.0},
                              is_material(Effect::sensor_quantization, r));
   // A lattice is seen directly in the data, not through a better prediction (quantising a model
   // that is slightly off can move its output to the wrong step): every level on the lattice,

@@ -65,7 +65,7 @@ struct FitOptions {
   double relative_tolerance = 1e-4;  // NLopt xtol_rel and ftol_rel
   int max_evaluations = 2000;        // per NLopt run
   int restarts = 1;                  // NLopt reruns from the best point found
-  int hybrid_restarts = 3;           // the same for the hybrid model (its cost is rougher)
+  int hybrid_restarts = 5;           // the same for the hybrid model (its cost is rougher)
   // Records longer than twice this are first fitted on their leading `coarse_samples` samples
   // (delay grid and search), then polished on the whole record; 0 = always the whole record.
   std::size_t coarse_samples = 2048;
