@@ -172,7 +172,10 @@ class ModelEngine {
     const double n_eff = effective_fit_samples();
     r.delta_bic = n_eff * std::log(std::max(after.fit_mse, 1e-300) / std::max(nominal_scores_.fit_mse, 1e-300)) +
                   extra * std::log(n_eff);
-    r.significant = material && r.score >= o_.min_score && -r.delta_bic >= o_.min_bic_gain;
+    // "Show the fit improve": the held-out Nrmse (mean over recordings) must rise too — the pooled
+    // squared residual can fall through one recording while the others get worse.
+    r.significant = material && r.score >= o_.min_score && -r.delta_bic >= o_.min_bic_gain &&
+                    r.heldout_nrmse_after > r.heldout_nrmse_before;
     judged_[name] = p;
     return r;
   }
