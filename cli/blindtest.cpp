@@ -38,10 +38,8 @@ void run(const BlindtestArguments& args) {
   options.experiments = args.experiments;
   options.effects = args.effects;
   if (!args.model.empty()) {
-    const auto kind = reduced::parse_model_kind(args.model);
-    if (!kind) throw InputError("--model " + args.model + ": expected one of liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid");
     diagnosis::ModelDiagnoseOptions m;
-    m.kind = *kind;
+    m.kind = reduced::require_model_kind(args.model);
     m.quantum_mm = args.quantum_mm;
     options.model = m;
     if (options.effects.empty()) options.effects = {"gate_rate_limit", "sensor_quantization"};

@@ -67,13 +67,11 @@ int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, 
 }
 
 int run_model(const DiagnoseArguments& args) {
-  const auto kind = reduced::parse_model_kind(args.model);
-  if (!kind) throw InputError("--model " + args.model + ": expected one of liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid");
   std::string problems;
   const std::vector<Recording> recordings = read_all(args.recordings, problems);
   if (!problems.empty()) throw InputError(problems);
   diagnosis::ModelDiagnoseOptions options;
-  options.kind = *kind;
+  options.kind = reduced::require_model_kind(args.model);
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
   options.quantum_mm = args.quantum_mm;

@@ -145,17 +145,12 @@ void print_table(const std::string& title, const std::vector<std::string>& names
 }
 
 void run_fit(const FitArguments& args) {
-  const auto kind = parse_model_kind(args.model);
-  if (!kind) {
-    throw InputError("--model " + args.model +
-                     ": unknown model (expected liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, "
-                     "nlfom-s or hybrid)");
-  }
+  const ModelKind kind = require_model_kind(args.model);
   std::optional<GammaGrid> grid;
   if (!args.gamma.empty()) {
     grid = GammaGrid::parse(args.gamma);
-    if (!uses_gamma(*kind)) {
-      throw InputError("--gamma: model " + model_name(*kind) +
+    if (!uses_gamma(kind)) {
+      throw InputError("--gamma: model " + model_name(kind) +
                        " has no gamma (the sweep applies to nliom-f, nlfom-f, nliom-s, nlfom-s, "
                        "hybrid)");
     }
@@ -168,7 +163,7 @@ void run_fit(const FitArguments& args) {
   std::vector<ExperimentData> data;
   for (const auto& file : args.recordings) {
     data.push_back(load_experiment(file, data_options));
-    if (uses_upstream_level(*kind)) require_upstream_level(data.back(), model_name(*kind));
+    if (uses_upstream_level(kind)) require_upstream_level(data.back(), model_name(kind));
   }
 
   ProgressLine progress;
@@ -186,30 +181,30 @@ void run_fit(const FitArguments& args) {
   std::vector<GammaSweep> sweeps;
   if (grid) {
     for (std::size_t j = 0; j < data.size(); ++j) {
-      sweeps.push_back(gamma_sweep(*kind, {data[j]}, options, *grid));
+      sweeps.push_back(gamma_sweep(kind, {data[j]}, options, *grid));
       fits.push_back(sweeps.back().best_fit);
       progress("gamma sweep done for " + data[j].source);
     }
   } else {
-    fits = fit_each(*kind, data, options);
+    fits = fit_each(kind, data, options);
   }
   std::optional<FitResult> nominal;
   std::optional<GammaSweep> nominal_sweep;
   if (args.nominal) {
     if (grid) {
-      nominal_sweep = gamma_sweep(*kind, data, options, *grid);
+      nominal_sweep = gamma_sweep(kind, data, options, *grid);
       nominal = nominal_sweep->best_fit;
     } else {
-      nominal = fit_nominal(*kind, data, options);
+      nominal = fit_nominal(kind, data, options);
     }
     progress("nominal model done");
   }
 
   // Table.
-  const auto names = parameter_names(*kind);
+  const auto names = parameter_names(kind);
   std::vector<std::pair<std::string, const FitResult*>> rows;
   for (const auto& f : fits) rows.emplace_back(basename_of(f.sources.front()), &f);
-  print_table(model_name(*kind) + " fits (IAE in mm s, Nrmse eq. 19" +
+  print_table(model_name(kind) + " fits (IAE in mm s, Nrmse eq. 19" +
                   (grid ? ", gamma by best Nrmse over " + args.gamma : std::string()) + ")",
               names, rows);
   std::map<std::string, double> dp;
@@ -239,7 +234,7 @@ void run_fit(const FitArguments& args) {
 
   if (args.json.empty()) return;
   nlohmann::json out;
-  out["model"] = model_name(*kind);
+  out["model"] = model_name(kind);
   out["options"] = {{"quantum_mm", args.quantum_mm},
                     {"gate_speed_mm_s", args.gate_speed_mm_s},
                     {"gl_memory", args.memory},

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "scenarios/recording.hpp"
+
 namespace canalsim::reduced {
 namespace {
 
@@ -62,6 +64,13 @@ std::optional<ModelKind> parse_model_kind(const std::string& name) {
     if (model_name(kind) == key) return kind;
   }
   return std::nullopt;
+}
+
+ModelKind require_model_kind(const std::string& name, const std::string& option) {
+  if (const auto kind = parse_model_kind(name)) return *kind;
+  std::string expected;
+  for (auto kind : all_model_kinds()) expected += (expected.empty() ? "" : ", ") + model_name(kind);
+  throw InputError(option + " " + name + ": unknown model (expected " + expected + ")");
 }
 
 bool is_fractional(ModelKind kind) {

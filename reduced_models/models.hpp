@@ -41,6 +41,8 @@ std::string model_name(ModelKind kind);
 // Parses a model name (case-insensitive, '_' accepted for '-'); nullopt when unknown.
 std::optional<ModelKind> parse_model_kind(const std::string& name);
 std::vector<ModelKind> all_model_kinds();
+// parse_model_kind, or InputError "<option> NAME: unknown model (expected liom, sopd, ...)".
+ModelKind require_model_kind(const std::string& name, const std::string& option = "--model");
 
 bool is_fractional(ModelKind kind);     // λ is a parameter (lfom, nlfom-*, hybrid)
 bool uses_upstream_level(ModelKind kind);  // nonlinear models need y_up
