@@ -51,6 +51,8 @@ int offtake_cell(const PoolSpec& pool, double x_m) {
   return std::clamp(static_cast<int>(x_m / dx), 0, pool.cells - 1);
 }
 
+bool offtake_at_end(const PoolSpec& pool, double x_m) { return x_m >= pool.length_m * (1.0 - 1e-12); }
+
 gates::GateGeometry gate_geometry(const GateSpec& g) {
   gates::GateGeometry geometry;
   geometry.width = g.width_m;
@@ -165,17 +167,21 @@ Scenario resolve_design(const Scenario& in) {
   for (std::size_t i = 0; i < s.pools.size(); ++i) {
     PoolSpec& p = s.pools[i];
     if (p.target_depth_m <= 0.0) continue;
+    double profile_end_depth = p.target_depth_m;
     try {
       const BackwaterProfile profile = backwater_profile(p, flows[i].inflow, p.target_depth_m);
       p.design_depth_m = profile.cell_depth;
       start_depth[i] = profile.start_depth;
+      profile_end_depth = profile.end_depth;
     } catch (const std::runtime_error& e) {
       fail("pools[" + std::to_string(i) + "].target_depth_m", e);
     }
     for (std::size_t k = 0; k < p.offtakes.size(); ++k) {
       OfftakeSpec& o = p.offtakes[k];
       if (o.kind != OfftakeKind::orifice || o.coefficient > 0.0) continue;  // fixed, or already sized
-      const double head = p.design_depth_m[static_cast<std::size_t>(offtake_cell(p, o.x_m))] - o.invert_m;
+      const double design_depth = offtake_at_end(p, o.x_m) ? profile_end_depth
+                                                           : p.design_depth_m[static_cast<std::size_t>(offtake_cell(p, o.x_m))];
+      const double head = design_depth - o.invert_m;
       if (!(head > 0.0)) {
         throw InputError(s.source + ": pools[" + std::to_string(i) + "].offtakes[" + std::to_string(k) +
                          "].invert_m = " + format_value(o.invert_m) + ": expected it below the design level");
@@ -198,9 +204,11 @@ Scenario resolve_design(const Scenario& in) {
     if (!g.auto_opening) continue;
     g.auto_opening = false;  // resolved: the copy has a number
     const PoolSpec &up = s.pools[i], &down = s.pools[i + 1];
-    const double z_up = cell_bed_elevation(up, up.cells - 1), z_down = cell_bed_elevation(down, 0);
+    // The solver's link sees the reconstructed states at the two end faces: the end cells' slopes
+    // are one-sided differences towards the interior, which extrapolate each pool's (linear) bed
+    // to its end, so the beds there are the pools' beds at x = L and x = 0.
+    const double z_up = up.bed_elevation_m - up.bed_slope * up.length_m, z_down = down.bed_elevation_m;
     const double sill = std::max(z_up, z_down);
-    // The solver's face depths are the reconstructed depths at the pool ends over each cell's bed.
     const double y1 = z_up + up.target_depth_m - sill;
     const double y3 = std::max(z_down + start_depth[i + 1] - sill, 0.0);
     try {

@@ -18,13 +18,17 @@
 //
 // Automatic openings: the Swamee law of the gate (gates/sluice_gate.hpp) is inverted by bisection
 // for the opening a with Q = b q(y1, y3, a), y1 and y3 measured from the sill as the solver's
-// GateLink measures them: the link's face depths are the MUSCL-reconstructed depths at the pool
-// ends over each end cell's bed, and the sill is the higher of the two end cells' beds. So
-// y1 = the upstream pool's target depth (at x = L), y3 = the next pool's design depth at x = 0
-// less the bed step between the two end cells. For the head gate y1 is the supply level.
+// GateLink measures them: the link's face states are the reconstructed states at the pool ends,
+// whose one-sided end slopes extrapolate each pool's linear bed to its end, and the sill is the
+// higher of those two end beds. So y1 = the upstream pool's target depth (at x = L) and y3 = the
+// next pool's design depth at x = 0, both above the sill (no bed step on a continuous bed). For
+// the head gate y1 is the supply level. (Taking the sill at the end cells' centres instead, as an
+// earlier version did, shifted each drowned check's head by half a cell's bed drop on each side;
+// with heads of a few centimetres that moved canal 2's levels by up to 3 cm.)
 //
 // Orifice offtakes: K = Q_design / sqrt(h_design − invert), with h_design the profile depth at the
-// offtake's cell, so the outlet delivers its design discharge at the design state.
+// offtake's cell (at x = L, the target depth, for an offtake at the pool's end), so the outlet
+// delivers its design discharge at the design state.
 #pragma once
 
 #include <vector>
@@ -39,6 +43,9 @@ namespace canalsim::scenarios {
 double cell_bed_elevation(const PoolSpec& pool, int cell);
 // The cell that holds an offtake at x (clamped to the pool).
 int offtake_cell(const PoolSpec& pool, double x_m);
+// Whether an offtake at x sits at the pool's downstream end (x = length_m), where it is withdrawn
+// at the end face (solver/reach.hpp, fixed_end_withdrawal) rather than inside the last cell.
+bool offtake_at_end(const PoolSpec& pool, double x_m);
 // The gate geometry and law of a gate spec (the multiplier applies to the published coefficient).
 gates::GateGeometry gate_geometry(const GateSpec& gate);
 

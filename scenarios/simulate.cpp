@@ -58,13 +58,19 @@ solver::ReachSpec reach_spec(const Scenario& s, const PoolSpec& pool) {
 }
 
 // Fixed offtakes withdraw −Q/dx from their cell; orifices become level-dependent outlets of the
-// reach (solver/reach.hpp). Returns a handle on each offtake for the experiment's events.
+// reach (solver/reach.hpp). An offtake at the pool's downstream end (x_m = length_m) withdraws
+// at the end face instead, just upstream of the check. Returns a handle on each offtake for the
+// experiment's events.
 std::vector<BuiltCanal::Offtake> apply_offtakes(solver::Reach& reach, const PoolSpec& pool) {
   std::vector<BuiltCanal::Offtake> handles;
   for (const auto& off : pool.offtakes) {
-    BuiltCanal::Offtake h{offtake_cell(pool, off.x_m), -1, off.discharge_m3s, off.coefficient, off.discharge_m3s};
+    BuiltCanal::Offtake h{offtake_cell(pool, off.x_m), offtake_at_end(pool, off.x_m), -1, off.discharge_m3s,
+                          off.coefficient, off.discharge_m3s};
     if (off.kind == OfftakeKind::orifice) {
-      h.outlet = reach.add_outlet(h.cell, off.coefficient, off.invert_m);
+      h.outlet = h.at_end ? reach.add_end_outlet(off.coefficient, off.invert_m)
+                          : reach.add_outlet(h.cell, off.coefficient, off.invert_m);
+    } else if (h.at_end) {
+      reach.fixed_end_withdrawal() += off.discharge_m3s;
     } else {
       reach.lateral_inflow()[static_cast<std::size_t>(h.cell)] -= off.discharge_m3s / reach.cell_length();
     }
@@ -268,6 +274,15 @@ BuiltCanal build_canal(const Scenario& input, const ExperimentSpec& e, const Dri
   return b;
 }
 
+double BuiltCanal::check_depth(int pool) const {
+  const solver::Reach& r = canal.reach(pool);
+  const int n = r.cells();
+  const double dry = canal.options().dry_depth;
+  double level = r.level(n - 1);
+  if (n >= 2 && r.depth(n - 1) > dry && r.depth(n - 2) > dry) level += 0.5 * (level - r.level(n - 2));
+  return level - check_bed.at(static_cast<std::size_t>(pool));
+}
+
 void apply_event(BuiltCanal& b, const EventSpec& ev) {
   if (ev.inflow_m3s >= 0.0 && b.head_inflow) *b.head_inflow = ev.inflow_m3s;
   if (ev.pool <= 0) return;
@@ -276,6 +291,9 @@ void apply_event(BuiltCanal& b, const EventSpec& ev) {
   if (o.outlet >= 0) {
     // The outlet gate is reset so that it would deliver the new discharge at its design level.
     reach.set_outlet_coefficient(o.outlet, o.design_coefficient * ev.offtake_m3s / std::max(o.design_m3s, 1e-300));
+  } else if (o.at_end) {
+    reach.fixed_end_withdrawal() = std::max(reach.fixed_end_withdrawal() + ev.offtake_m3s - o.current_m3s, 0.0);
+    o.current_m3s = ev.offtake_m3s;
   } else {
     reach.lateral_inflow()[static_cast<std::size_t>(o.cell)] += (o.current_m3s - ev.offtake_m3s) / reach.cell_length();
     o.current_m3s = ev.offtake_m3s;
@@ -376,17 +394,14 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   gate_options.sample_period = h;
   Sensor x_up(gate_options);
   std::vector<double> t_s, u_mm, q_lps, regime;
-  // y_check1..N: the depth at the check of each pool (its last cell's level above the bed at the
-  // pool's downstream end), for canals of several pools.
+  // y_check1..N: the depth at the check of each pool (BuiltCanal::check_depth), for canals of
+  // several pools.
   const int checks = b.canal.reach_count() > 1 ? b.canal.reach_count() : 0;
   std::vector<Sensor> y_check;
   for (int i = 0; i < checks; ++i) y_check.push_back(level_sensor(3 + static_cast<std::uint64_t>(i)));
   const auto check_depths = [&] {
     std::vector<double> depths(static_cast<std::size_t>(checks));
-    for (int i = 0; i < checks; ++i) {
-      const auto& r = b.canal.reach(i);
-      depths[static_cast<std::size_t>(i)] = r.level(r.cells() - 1) - b.check_bed[static_cast<std::size_t>(i)];
-    }
+    for (int i = 0; i < checks; ++i) depths[static_cast<std::size_t>(i)] = b.check_depth(i);
     return depths;
   };
 

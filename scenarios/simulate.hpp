@@ -40,6 +40,7 @@ struct BuiltCanal {
   // Every offtake, per pool, for the experiment's events.
   struct Offtake {
     int cell = 0;
+    bool at_end = false;             // withdrawn at the pool's downstream end face (x_m = length)
     int outlet = -1;                 // index among the reach's outlets; -1 = fixed discharge
     double design_m3s = 0.0;         // the scenario's (design) discharge
     double design_coefficient = 0.0; // orifice K at design [m^2.5/s]
@@ -48,9 +49,13 @@ struct BuiltCanal {
   std::vector<std::vector<Offtake>> offtakes;
   // Openings of the head gate (if any) and the gates between pools, as built ("auto" resolved) [m].
   std::vector<double> openings;
-  // Bed elevation at each pool's downstream end x = L [m]: the check depth is the water level of
-  // the pool's last cell above it.
+  // Bed elevation at each pool's downstream end x = L [m].
   std::vector<double> check_bed;
+  // Depth at the check of pool i (0-based) [m]: the water level extrapolated from the last two
+  // cell centres to x = L (the one-sided end reconstruction of the scheme, solver/scheme.cpp)
+  // above check_bed. The last cell's own level sits half a cell upstream, which on a backwater
+  // curve is millimetres lower.
+  double check_depth(int pool) const;
 };
 
 // Applies one event (new offtake discharge, new head inflow) to a built canal, as the run does at

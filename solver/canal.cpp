@@ -123,17 +123,29 @@ double Canal::compute_fluxes(double t) {
       r.face_momentum_right_[0] = f.momentum;
       speed = std::max(speed, f.max_speed);
     }
+    // An offtake at the end face (Reach::fixed_end_withdrawal): the structure sees the flow that
+    // goes on past it, the reach's face passes the structure's flux plus the withdrawal.
+    const InteriorState end_cell = interior(r, r.cells_ - 1);
+    const double withdrawn = r.evaluate_end_withdrawal(end_cell.depth, options_.dry_depth);
+    InteriorState beyond = end_cell;
+    beyond.discharge -= withdrawn;
+    // Level continuous across the offtake: the reach side's momentum flux is that of the face
+    // state carrying Q_b + Q_w instead of Q_b, i.e. + ((Q_b + Q_w)² − Q_b²) / A.
+    auto with_offtake = [&](double mass, double momentum) {
+      r.face_mass_[n] = mass + withdrawn;
+      r.face_momentum_left_[n] =
+          withdrawn != 0.0 && end_cell.area > 0.0 ? momentum + withdrawn * (2.0 * mass + withdrawn) / end_cell.area
+                                                  : momentum;
+    };
     if (const auto& c = downstream_ends_[ri]; c.boundary) {
-      const Flux f = c.boundary->flux({End::downstream, interior(r, r.cells_ - 1), r.section_, g, t, r.dx_});
-      r.face_mass_[n] = f.mass;
-      r.face_momentum_left_[n] = f.momentum;
+      const Flux f = c.boundary->flux({End::downstream, beyond, r.section_, g, t, r.dx_});
+      with_offtake(f.mass, f.momentum);
       speed = std::max(speed, f.max_speed);
     } else if (c.link) {
       Reach& d = reaches_[static_cast<std::size_t>(c.other_reach)];
-      LinkInput in{interior(r, r.cells_ - 1), interior(d, 0), r.section_, d.section_, g, t};
+      LinkInput in{beyond, interior(d, 0), r.section_, d.section_, g, t};
       const LinkFlux f = c.link->flux(in);
-      r.face_mass_[n] = f.mass;
-      r.face_momentum_left_[n] = f.momentum_upstream;
+      with_offtake(f.mass, f.momentum_upstream);
       d.face_mass_[0] = f.mass;
       d.face_momentum_right_[0] = f.momentum_downstream;
       if (f.max_speed > 0.0) limit = std::min(limit, std::min(r.dx_, d.dx_) / f.max_speed);
@@ -152,8 +164,10 @@ Status Canal::apply_update(double dt, double alpha, double weight, bool final_st
     if (res.any_non_finite) return find_non_finite(time_ + dt);
     Accumulators& acc = acc_[ri];
     acc.stage_inflow += weight * dt * r.face_mass_[0];
-    acc.stage_outflow += weight * dt * r.face_mass_[static_cast<std::size_t>(r.cells_)];
+    // An end-face offtake is lateral outflow, not flow through the end (nor through a link).
+    acc.stage_outflow += weight * dt * (r.face_mass_[static_cast<std::size_t>(r.cells_)] - r.stage_end_withdrawal_);
     if (res.any_lateral) acc.stage_lateral += weight * dt * lateral_volume_rate(r, options_.dry_depth);
+    acc.stage_lateral -= weight * dt * r.stage_end_withdrawal_;
     if (res.any_negative) {
       // Tolerate round-off (a cell drained exactly); a real loss of positivity rejects the step.
       double scale = 0.0, min_area = 0.0;

@@ -48,13 +48,35 @@ void Reach::set_outlet_coefficient(int k, double coefficient) {
   outlets_.at(static_cast<std::size_t>(k)).coefficient = std::max(coefficient, 0.0);
 }
 
+int Reach::add_end_outlet(double coefficient, double invert_depth) {
+  outlets_.push_back({cells_ - 1, std::max(coefficient, 0.0), invert_depth, 0.0, true});
+  return static_cast<int>(outlets_.size()) - 1;
+}
+
 double Reach::outlet_discharge(int k) const {
   const Outlet& o = outlets_.at(static_cast<std::size_t>(k));
-  return orifice_discharge(o, depth(o.cell));
+  return o.at_downstream_end ? o.applied : orifice_discharge(o, depth(o.cell));
+}
+
+double Reach::evaluate_end_withdrawal(double face_depth, double dry_depth) {
+  double q = face_depth > dry_depth ? fixed_end_withdrawal_ : 0.0;
+  for (Outlet& o : outlets_) {
+    if (!o.at_downstream_end) continue;
+    o.applied = orifice_discharge(o, face_depth);
+    q += o.applied;
+  }
+  stage_end_withdrawal_ = q;
+  return q;
+}
+
+bool Reach::has_end_withdrawal() const {
+  if (fixed_end_withdrawal_ != 0.0) return true;
+  return std::any_of(outlets_.begin(), outlets_.end(), [](const Outlet& o) { return o.at_downstream_end; });
 }
 
 void Reach::update_outlets() {
   for (Outlet& o : outlets_) {
+    if (o.at_downstream_end) continue;  // withdrawn at the face (Canal::compute_fluxes)
     const auto i = static_cast<std::size_t>(o.cell);
     const double q = orifice_discharge(o, h_[i]);
     lateral_inflow_[i] += (o.applied - q) / dx_;  // replaces the outlet's previous share

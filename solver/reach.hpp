@@ -48,13 +48,34 @@ class Reach {
     double coefficient = 0.0;   // K [m^2.5/s], >= 0
     double invert_depth = 0.0;  // invert height above the cell's bed [m]
     double applied = 0.0;       // Q_k of the last evaluation [m³/s] (its share of lateral_inflow)
+    bool at_downstream_end = false;  // withdraws at the end face (see end_withdrawal), not the cell
   };
   int add_outlet(int cell, double coefficient, double invert_depth);  // returns the index
+  // An outlet at the reach's downstream end face, just upstream of the boundary or link there;
+  // its head is the face depth. Returns the index.
+  int add_end_outlet(double coefficient, double invert_depth);
   const std::vector<Outlet>& outlets() const { return outlets_; }
   void set_outlet_coefficient(int k, double coefficient);
-  double outlet_discharge(int k) const;  // Q_k for the current state [m³/s]
-  // Re-evaluates every outlet from the depths h_ of the current stage.
+  // Q_k for the current state [m³/s]; for an end outlet, what the last flux evaluation withdrew.
+  double outlet_discharge(int k) const;
+  // Re-evaluates every cell outlet from the depths h_ of the current stage.
   void update_outlets();
+
+  // Withdrawal at the downstream end face [m³/s], >= 0: an offtake just upstream of the check.
+  // The Canal hands the boundary or link there the flow that goes on past the offtake (the end
+  // cell's discharge less the withdrawal), so the structure's face state is the one downstream of
+  // the offtake, with the level continuous across it; the reach's face passes the structure's flux
+  // plus the withdrawal. A withdrawal inside a cell instead leaves that cell carrying the mean of
+  // what enters and leaves it, which the HLL flux to its neighbour can pass only through a depth
+  // dip of about ΔQ / (2 c T) (docs/asce-canals.md). The fixed part is set by the caller (0 by
+  // default; held over a step, stopped while the end cell is dry); end outlets add theirs.
+  double& fixed_end_withdrawal() { return fixed_end_withdrawal_; }
+  double fixed_end_withdrawal() const { return fixed_end_withdrawal_; }
+  bool has_end_withdrawal() const;
+  // Evaluates the end-face withdrawal for face depth h [m] (fixed part + end outlets), records
+  // it for the volume balance and each end outlet's share, and returns it [m³/s].
+  double evaluate_end_withdrawal(double face_depth, double dry_depth);
+  double last_end_withdrawal() const { return stage_end_withdrawal_; }
 
   double depth(int i) const { return section_.depth(area_[i]); }
   double level(int i) const { return bed_[i] + depth(i); }
@@ -71,6 +92,8 @@ class Reach {
   double manning_n_;
   std::vector<double> area_, discharge_, bed_, lateral_inflow_;
   std::vector<Outlet> outlets_;
+  double fixed_end_withdrawal_ = 0.0;
+  double stage_end_withdrawal_ = 0.0;  // end_withdrawal of the last compute_fluxes [m³/s]
   // Scheme work arrays (solver/scheme.cpp): start-of-step state, primitive variables, 1/A and
   // their limited slopes per cell, fluxes per face (cells + 1 faces; face f is left of cell f).
   std::vector<double> area0_, discharge0_;

@@ -267,6 +267,7 @@ struct Shooting {
 bool shooting_guess(Canal& canal, double time) {
   if (canal.reach_count() != 1) return false;
   const Reach& reach = canal.reach(0);
+  if (reach.has_end_withdrawal()) return false;
   for (double ql : reach.lateral_inflow())
     if (ql != 0.0) return false;
   Shooting shot{canal, time, reach, reach.section(), canal.options().gravity, {}};

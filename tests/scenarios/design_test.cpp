@@ -139,9 +139,9 @@ TEST(ResolveDesign, HeadGateOpeningPassesTheOfftakesFromTheSupplyLevel) {
   const double a = r.head_gate->opening_m, y1 = 1.5;
   EXPECT_FALSE(r.head_gate->auto_opening);
   EXPECT_NEAR(0.864 * a * std::sqrt(9.81 * y1) * std::pow((y1 - a) / (y1 + 15.0 * a), 0.072), 0.5, 1e-9);
-  // The orifice delivers its design discharge at the design depth of its cell.
-  const double h = r.pools[0].design_depth_m.back();
-  EXPECT_NEAR(r.pools[0].offtakes[0].coefficient * std::sqrt(h), 0.5, 1e-12);
+  // The orifice sits at the pool's end (x_m = length_m): it delivers its design discharge at the
+  // target depth there.
+  EXPECT_NEAR(r.pools[0].offtakes[0].coefficient * std::sqrt(0.9), 0.5, 1e-12);
 }
 
 }  // namespace

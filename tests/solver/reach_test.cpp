@@ -54,5 +54,36 @@ TEST(Outlets, AChangedCoefficientTakesEffectAndZeroStopsTheOutlet) {
   for (double q : canal.reach(0).lateral_inflow()) EXPECT_NEAR(q, 0.0, 1e-17);
 }
 
+// An offtake at the end face of a reach joined to the next by a link: the volume balance closes,
+// the offtake is booked as lateral outflow of its reach (fixed part + orifice, by hand from the
+// stage evaluations' sum), and the link passes the same volume out of one reach and into the next.
+TEST(EndWithdrawal, ThroughALinkTheBalanceClosesAndTheLinkCarriesOnlyWhatGoesOn) {
+  Canal canal;
+  for (int k = 0; k < 2; ++k) {
+    ReachSpec spec;
+    spec.length = 50.0;
+    spec.cells = 25;
+    spec.section = {1.0, 1.0};
+    spec.manning_n = 0.015;
+    spec.initial_depth.assign(25, 1.0);
+    ASSERT_TRUE(canal.add_reach(spec));
+  }
+  ASSERT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.6)));
+  ASSERT_TRUE(canal.connect(0, 1, std::make_shared<ContinuousLink>()));
+  ASSERT_TRUE(canal.set_boundary(1, End::downstream, FixedLevelBoundary::depth(1.0)));
+  canal.reach(0).fixed_end_withdrawal() = 0.15;
+  const int outlet = canal.reach(0).add_end_outlet(0.1, 0.2);
+  ASSERT_TRUE(canal.advance_to(300.0));
+  const VolumeBalance total = canal.total_balance(), first = canal.balance(0), second = canal.balance(1);
+  EXPECT_LT(total.relative_error(), 1e-12);
+  EXPECT_NEAR(total.inflow, 0.6 * 300.0, 1e-9);
+  EXPECT_NEAR(first.outflow, second.inflow, 1e-9 * second.inflow);  // the link: out of one, into the other
+  // The offtake: at least the fixed 0.15 m³/s and the orifice's K sqrt(h − 0.2) at ~0.8 m head.
+  const double q_orifice = canal.reach(0).outlet_discharge(outlet);
+  EXPECT_NEAR(q_orifice, 0.1 * std::sqrt(canal.reach(0).depth(24) - 0.2), 2e-3);
+  EXPECT_NEAR(first.lateral / 300.0, -(0.15 + q_orifice), 0.01);
+  EXPECT_NEAR(second.lateral, 0.0, 0.0);
+}
+
 }  // namespace
 }  // namespace canalsim::solver

@@ -108,5 +108,55 @@ TEST(SteadyState, InvalidOptionsNameTheField) {
   EXPECT_NE(options.validate().message().find("max_iterations"), std::string::npos);
 }
 
+// An offtake at the end face of a horizontal, frictionless channel (inflow Q_in upstream, level
+// h_d held downstream, Q_w withdrawn just upstream of the end): mass and momentum balance with
+// the level continuous across the offtake give the closed form h ≡ h_d and Q ≡ Q_in in every
+// cell, and Q_in − Q_w through the end. The same withdrawal inside the last cell leaves that
+// cell carrying about the mean of Q_in and Q_in − Q_w, which the HLL flux to its neighbour passes
+// only through a depth dip of about Q_w / (2 c T) — the reason for the face withdrawal
+// (docs/asce-canals.md).
+Canal channel_with_offtake(bool at_end_face) {
+  ReachSpec spec;
+  spec.length = 100.0;
+  spec.cells = 50;
+  spec.section = {1.0, 0.0};
+  spec.manning_n = 0.0;
+  spec.initial_depth.assign(50, 1.0);
+  Canal canal;
+  EXPECT_TRUE(canal.add_reach(spec));
+  EXPECT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.5)));
+  EXPECT_TRUE(canal.set_boundary(0, End::downstream, FixedLevelBoundary::depth(1.0)));
+  if (at_end_face) {
+    canal.reach(0).fixed_end_withdrawal() = 0.2;
+  } else {
+    canal.reach(0).lateral_inflow().back() = -0.2 / canal.reach(0).cell_length();
+  }
+  return canal;
+}
+
+TEST(EndWithdrawal, SteadyFlowKeepsTheLevelAndCarriesTheInflowToTheOfftake) {
+  Canal canal = channel_with_offtake(true);
+  const auto summary = solve_steady_state(canal);
+  ASSERT_TRUE(summary.status) << summary.status.message();
+  const Reach& r = canal.reach(0);
+  for (int i = 0; i < r.cells(); ++i) {
+    EXPECT_NEAR(r.depth(i), 1.0, 1e-10) << "cell " << i;
+    EXPECT_NEAR(r.discharge()[static_cast<std::size_t>(i)], 0.5, 1e-10) << "cell " << i;
+  }
+  // A step from it: the end passes Q_in − Q_w, the offtake is booked as lateral outflow.
+  canal.reset_balance();
+  ASSERT_TRUE(canal.step());
+  const double dt = canal.statistics().last_dt;
+  const VolumeBalance b = canal.total_balance();
+  EXPECT_NEAR(b.outflow / dt, 0.3, 1e-10);
+  EXPECT_NEAR(b.lateral / dt, -0.2, 1e-12);
+  EXPECT_NEAR(r.last_end_withdrawal(), 0.2, 0.0);
+
+  Canal in_cell = channel_with_offtake(false);
+  ASSERT_TRUE(in_cell.advance_to(600.0));  // ~20 wave crossings (Newton needs a better start here)
+  const double c = std::sqrt(9.81);
+  EXPECT_LT(in_cell.reach(0).depth(49), 1.0 - 0.5 * 0.2 / (2.0 * c));  // the dip, at least half of it
+}
+
 }  // namespace
 }  // namespace canalsim::solver
