@@ -171,6 +171,10 @@ Scenario resolve_design(const Scenario& in) {
     try {
       const BackwaterProfile profile = backwater_profile(p, flows[i].inflow, p.target_depth_m);
       p.design_depth_m = profile.cell_depth;
+      p.design_discharge_m3s.resize(profile.cell_depth.size());
+      for (int k = 0; k < p.cells; ++k) {
+        p.design_discharge_m3s[static_cast<std::size_t>(k)] = discharge_at(p, flows[i].inflow, (k + 0.5) * p.length_m / p.cells);
+      }
       start_depth[i] = profile.start_depth;
       profile_end_depth = profile.end_depth;
     } catch (const std::runtime_error& e) {

@@ -44,9 +44,10 @@ struct PoolSpec {
   double initial_depth_m = 0.0;     // first guess of the steady state; 0 = from the boundaries
   double target_depth_m = 0.0;      // design depth at the downstream end (check); 0 = none
   std::vector<OfftakeSpec> offtakes;
-  // Design (backwater) depth at each cell centre, filled by scenarios/design.hpp when the pool
-  // has a target depth; the first guess of the steady state. Not a TOML key.
+  // Design (backwater) depth and discharge at each cell centre, filled by scenarios/design.hpp
+  // when the pool has a target depth; the first guess of the steady state. Not TOML keys.
   std::vector<double> design_depth_m;
+  std::vector<double> design_discharge_m3s;
 };
 
 enum class GateLaw { swamee, simple };

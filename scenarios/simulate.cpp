@@ -50,10 +50,13 @@ solver::ReachSpec reach_spec(const Scenario& s, const PoolSpec& pool) {
   r.manning_n = pool.manning_n;
   r.bed_elevation.resize(static_cast<std::size_t>(pool.cells));
   for (int i = 0; i < pool.cells; ++i) r.bed_elevation[static_cast<std::size_t>(i)] = cell_bed_elevation(pool, i);
-  // First guess of the steady state: the design (backwater) profile when there is one.
+  // First guess of the steady state: the design (backwater) profile with its discharges when
+  // there is one (at rest, Newton's line search failed at canal 1's hydraulic jumps and needed
+  // continuation marches), else a level pool at rest.
   const bool design = pool.initial_depth_m <= 0.0 && !pool.design_depth_m.empty();
   r.initial_depth = design ? pool.design_depth_m
                            : std::vector<double>(static_cast<std::size_t>(pool.cells), automatic_initial_depth(s, pool));
+  if (design) r.initial_discharge = pool.design_discharge_m3s;
   return r;
 }
 

@@ -146,7 +146,7 @@ BENCHMARK(BM_BumpSteadyStateTimeMarchingTo1e8)->Unit(benchmark::kMillisecond);
 
 // An irrigation canal: ASCE test canal 2 (Corning; 8 trapezoidal pools, 28 km, 280 cells,
 // drowned checks, orifice offtakes, end pump; docs/asce-canals.md) from the builder's start (the
-// design backwater profile, at rest). Its pools settle with time constants of hours, which is
+// design backwater profile with its design discharges). Its pools settle with time constants of hours, which is
 // where a steady-state solver earns its keep.
 canalsim::scenarios::BuiltCanal asce2_canal() {
   const auto asce2 = builtin_scenario("asce2");
