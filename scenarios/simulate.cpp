@@ -294,13 +294,14 @@ void apply_event(BuiltCanal& b, const EventSpec& ev) {
   if (o.outlet >= 0) {
     // The outlet gate is reset so that it would deliver the new discharge at its design level.
     reach.set_outlet_coefficient(o.outlet, o.design_coefficient * ev.offtake_m3s / std::max(o.design_m3s, 1e-300));
-  } else if (o.at_end) {
+    return;
+  }
+  if (o.at_end) {
     reach.fixed_end_withdrawal() = std::max(reach.fixed_end_withdrawal() + ev.offtake_m3s - o.current_m3s, 0.0);
-    o.current_m3s = ev.offtake_m3s;
   } else {
     reach.lateral_inflow()[static_cast<std::size_t>(o.cell)] += (o.current_m3s - ev.offtake_m3s) / reach.cell_length();
-    o.current_m3s = ev.offtake_m3s;
   }
+  o.current_m3s = ev.offtake_m3s;
 }
 
 namespace {
