@@ -24,6 +24,17 @@ std::string fmt(double v, int digits) {
   return buffer;
 }
 
+// A fitted parameter: fixed decimals, except a small non-zero value (the nonlinear models' scale
+// K / H^γ at a large γ, ~1e-10) keeps three significant digits instead of printing as 0.0000.
+std::string parameter_fmt(double v, int digits) {
+  if (std::isfinite(v) && v != 0.0 && std::abs(v) < 0.01) {
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%.3g", v);
+    return buffer;
+  }
+  return fmt(v, digits);
+}
+
 // Δp of eq. (22) divides by the nominal parameter: a nominal γ of 0 (the linear form) makes it
 // undefined, which the table says instead of printing a bare infinity.
 std::string uncertainty_cell(double index) {
@@ -754,7 +765,7 @@ std::string to_markdown(const StudyResult& r) {
       md << "| " << op << " |";
       for (const auto& n : names) {
         md << " " << cell(paper_opt(paper_fit(t, op, n)), digits_for(n)) << " / "
-           << fmt(here_parameter(t.fits[k].model, n), digits_for(n)) << " |";
+           << parameter_fmt(here_parameter(t.fits[k].model, n), digits_for(n)) << " |";
       }
       md << " " << cell(paper_opt(paper_fit(t, op, "nrmse")), 2) << " / " << fmt(t.fits[k].nrmse.front(), 2)
          << " |\n";
@@ -764,7 +775,7 @@ std::string to_markdown(const StudyResult& r) {
       md << "| nominal @ " << op << " |";
       for (const auto& n : names) {
         md << " " << cell(paper_opt("/" + t.spec.paper_key + "/nominal/" + n), digits_for(n)) << " / "
-           << fmt(here_parameter(t.nominal.model, n), digits_for(n)) << " |";
+           << parameter_fmt(here_parameter(t.nominal.model, n), digits_for(n)) << " |";
       }
       md << " " << cell(paper_opt("/" + t.spec.paper_key + "/nominal/nrmse/" + op), 2) << " / "
          << fmt(t.nominal.nrmse[k], 2) << " |\n";
