@@ -32,11 +32,25 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   throw InputError(source + ":" + std::to_string(line) + ": " + what);
 }
 
+// True when `text` is a whole number in C syntax ("12", "-0.5", "1e3"): a header of numbers is a
+// data row without a header.
+bool is_number(const std::string& text) {
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return !text.empty() && ec == std::errc() && ptr == text.data() + text.size();
+}
+
+std::string format_number(double value);
+
 double parse_cell(const std::string& text, const std::string& column, const std::string& source,
                   std::size_t line) {
   if (column == columns::regime) {
     if (text == "free") return static_cast<double>(RegimeCode::free);
     if (text == "submerged") return static_cast<double>(RegimeCode::submerged);
+    // Also accepted: the numeric codes 0 (free) and 1 (submerged).
+    if (text != "0" && text != "1") {
+      fail(source, line, "column regime: expected free, submerged, 0 or 1, found '" + text + "'");
+    }
   }
   double value = 0.0;
   const char* begin = text.data();
@@ -60,13 +74,13 @@ void check_time_axis(const Recording& rec, const std::vector<std::size_t>& row_l
   for (std::size_t i = 1; i < t.size(); ++i) {
     const double step = t[i] - t[i - 1];
     if (!(step > 0.0)) {
-      fail(rec.source, row_lines[i], "t_s is not increasing (" + std::to_string(t[i - 1]) +
-                                         " then " + std::to_string(t[i]) + ")");
+      fail(rec.source, row_lines[i], "t_s is not increasing (" + format_number(t[i - 1]) +
+                                         " then " + format_number(t[i]) + ")");
     }
     if (std::abs(step - dt) > tolerance * dt) {
       fail(rec.source, row_lines[i],
-           "t_s is not uniformly sampled (step " + std::to_string(step) + " s, expected " +
-               std::to_string(dt) + " s)");
+           "t_s is not uniformly sampled (step " + format_number(step) + " s, expected " +
+               format_number(dt) + " s, within " + format_number(100.0 * tolerance) + " %)");
     }
   }
 }
@@ -158,6 +172,9 @@ Recording parse_recording(const std::string& text, const std::string& source,
     }
     const auto fields = split_csv_line(content);
     if (!have_header) {
+      if (std::all_of(fields.begin(), fields.end(), is_number)) {
+        fail(source, line_number, "the first line is numbers, not a header (expected column names, e.g. t_s,u_mm,y_dwe_mm)");
+      }
       for (const auto& name : fields) {
         if (name.empty()) fail(source, line_number, "empty column name in the header");
         if (rec.has(name)) fail(source, line_number, "column " + name + " appears twice");
@@ -182,17 +199,38 @@ Recording parse_recording(const std::string& text, const std::string& source,
     }
     row_lines.push_back(line_number);
   }
-  if (!have_header) fail(source, line_number, "no header line (expected e.g. t_s,u_mm,y_dwe_mm)");
+  if (!have_header) {
+    throw InputError(source + ": " + (line_number == 0 ? "the file is empty" : "only comments and blank lines") +
+                     ", no header line (expected column names, e.g. t_s,u_mm,y_dwe_mm)");
+  }
   if (rec.has(columns::time)) check_time_axis(rec, row_lines, options.uniform_tolerance);
   return rec;
 }
 
-Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options) {
+std::string read_text_file(const std::filesystem::path& file, const std::string& what) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    throw InputError(file.string() + ": cannot open the " + what + " for reading (no such file)");
+  }
+  if (std::filesystem::is_directory(status)) {
+    throw InputError(file.string() + ": is a directory, expected a " + what);
+  }
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open the recording for reading");
+  if (!in) throw InputError(file.string() + ": cannot open the " + what + " for reading (permission denied?)");
   std::ostringstream buffer;
   buffer << in.rdbuf();
-  return parse_recording(buffer.str(), file.string(), options);
+  // A file stream reports a read error as an early end of file: compare with the size the file
+  // system gives, so that an I/O error does not pass for a short or empty file.
+  const auto size = std::filesystem::is_regular_file(status) ? std::filesystem::file_size(file, ec) : 0;
+  if (in.bad() || (!ec && buffer.str().size() < size)) {
+    throw InputError(file.string() + ": read error (I/O failure) on the " + what);
+  }
+  return buffer.str();
+}
+
+Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options) {
+  return parse_recording(read_text_file(file, "recording"), file.string(), options);
 }
 
 std::string format_recording(const Recording& rec) {

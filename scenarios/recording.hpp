@@ -65,12 +65,23 @@ struct RecordingReadOptions {
   double uniform_tolerance = 0.01;
 };
 
+// What a gate-command series (an experiment's `input.file`) needs: time and u_mm only.
+inline RecordingReadOptions input_series_columns() {
+  RecordingReadOptions options;
+  options.required = {columns::time, columns::gate_command};
+  return options;
+}
+
 // Reads and validates a recording. Throws InputError ("FILE:LINE: problem") on an unreadable
 // file, a missing header or required column, a non-numeric or NaN value, a row of the wrong
 // length, or time that is not increasing and uniformly sampled.
 Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options = {});
 Recording parse_recording(const std::string& text, const std::string& source,
                           const RecordingReadOptions& options = {});
+
+// The whole text of `file`. Throws InputError naming the file and `what` it is ("scenario file",
+// "recording") when it is missing, a directory, or fails to read (an I/O error is not an empty file).
+std::string read_text_file(const std::filesystem::path& file, const std::string& what);
 
 // Serialises a recording (metadata, header, rows; `regime` as free/submerged).
 std::string format_recording(const Recording& recording);

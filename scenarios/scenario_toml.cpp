@@ -1,5 +1,7 @@
 #include "scenarios/scenario_toml.hpp"
 
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -127,6 +129,14 @@ SensorSpec read_sensors(TomlTable t, const SensorSpec& defaults) {
   return s;
 }
 
+// A relative path in a scenario file is relative to that file's folder (as a user who keeps the
+// scenario beside its data expects), not to the working directory.
+std::string beside_scenario(const std::string& scenario_source, const std::string& path) {
+  const std::filesystem::path p(path), scenario(scenario_source);
+  if (p.is_absolute() || !scenario.has_parent_path() || !std::filesystem::is_regular_file(scenario)) return path;
+  return (scenario.parent_path() / p).lexically_normal().string();
+}
+
 InputSpec read_input(TomlTable t) {
   InputSpec in;
   const std::string kind = t.choice("kind", "prbs", {"constant", "prbs", "step", "ramp", "file"});
@@ -142,7 +152,17 @@ InputSpec read_input(TomlTable t) {
   in.start_s = t.number("start_s", in.start_s, kNonNegative, "s");
   in.ramp_duration_s = t.number("ramp_duration_s", in.ramp_duration_s, kPositive, "s");
   in.file = t.string("file", in.file);
-  if (in.kind == InputKind::file && in.file.empty()) t.fail("file", "is missing: expected the path of a recording with a u_mm column");
+  if (in.kind == InputKind::file) {
+    if (in.file.empty()) t.fail("file", "is missing: expected the path of a recording with a u_mm column");
+    const std::string given = in.file;
+    in.file = beside_scenario(t.file(), given);
+    // Read now, so that a missing or malformed series stops the run before any output is written.
+    try {
+      (void)read_recording(in.file, input_series_columns());
+    } catch (const InputError& e) {
+      t.fail_value("file", "\"" + given + "\"", e.what());
+    }
+  }
   t.reject_unknown_keys();
   return in;
 }
@@ -177,7 +197,7 @@ ExperimentSpec read_experiment(TomlTable t, const Scenario& s) {
                                ? t.required_number("operating_opening_mm", {0.0, 1.0e5}, "mm")
                                : t.number("operating_opening_mm", 0.0, {0.0, 1.0e5}, "mm");
   e.duration_s = t.number("duration_s", e.duration_s, {0.0, 1.0e7, true}, "s");
-  e.settle_s = t.number("settle_s", e.settle_s, kNonNegative, "s");
+  e.settle_s = t.number("settle_s", e.settle_s, {0.0, 1.0e6}, "s");
   if (t.has("input")) e.input = read_input(t.table("input"));
   if (t.has("sensors")) e.sensors = read_sensors(t.table("sensors"), scenario_sensors);
   for (auto ev : t.tables("events")) {
@@ -195,7 +215,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
   s.upstream = read_upstream(root.table("upstream"));
   if (root.has("head_gate")) s.head_gate = read_gate(root.table("head_gate"), GateSpec{});
   for (auto p : root.tables("pools")) s.pools.push_back(read_pool(p));
-  if (s.pools.empty()) root.fail("", "expected at least one [[pools]] table");
+  if (s.pools.empty()) root.fail("pools", "missing: expected at least one [[pools]] table (see docs/scenarios.md)");
   for (auto g : root.tables("gates")) {
     s.gates.push_back(read_gate(g, GateSpec{}));
     const std::size_t i = s.gates.size() - 1;
@@ -230,15 +250,33 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
   return s;
 }
 
-[[noreturn]] void invalid(const Scenario& s, const std::string& key, const std::string& what) {
-  throw InputError(s.source + ": " + key + ": " + what);
+std::string number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
 }
 
-void check_gate_fits(const Scenario& s, const GateSpec& g, const PoolSpec& pool, const std::string& key) {
+// Checks that span several keys. The TOML document, when the scenario came from one, lets a
+// message name the line of the key it blames: "FILE:LINE: key: what".
+struct Validator {
+  const Scenario& s;
+  const toml::table* document = nullptr;
+
+  [[noreturn]] void invalid(const std::string& key, const std::string& what) const {
+    std::string where = s.source;
+    if (document) {
+      if (const auto node = document->at_path(key)) where += ":" + std::to_string(node.node()->source().begin.line);
+    }
+    // "key = value: expected ..." when the message starts with the value, as TomlTable writes it.
+    throw InputError(where + ": " + key + (what.rfind("= ", 0) == 0 ? " " : ": ") + what);
+  }
+};
+
+void check_gate_fits(const Validator& v, const GateSpec& g, const PoolSpec& pool, const std::string& key) {
   if (g.max_opening_m > pool.wall_height_m) {
-    invalid(s, key + ".max_opening_m", "= " + std::to_string(g.max_opening_m) +
+    v.invalid(key + ".max_opening_m", "= " + number(g.max_opening_m) +
                                            " m: expected at most the wall height of pool '" + pool.name +
-                                           "' (" + std::to_string(pool.wall_height_m) + " m)");
+                                           "' (" + number(pool.wall_height_m) + " m)");
   }
 }
 
@@ -251,30 +289,32 @@ const ExperimentSpec* Scenario::find_experiment(const std::string& wanted) const
   return nullptr;
 }
 
-void validate(const Scenario& s) {
+static void validate(const Scenario& s, const toml::table* document) {
+  const Validator v{s, document};
   if (s.gates.size() + 1 != s.pools.size()) {
-    invalid(s, "gates", std::to_string(s.gates.size()) + " gates for " + std::to_string(s.pools.size()) +
+    v.invalid("gates", std::to_string(s.gates.size()) + " gates for " + std::to_string(s.pools.size()) +
                             " pools: expected one [[gates]] table between each pair of pools");
   }
-  if (s.head_gate) check_gate_fits(s, *s.head_gate, s.pools.front(), "head_gate");
+  if (s.head_gate) check_gate_fits(v, *s.head_gate, s.pools.front(), "head_gate");
   for (std::size_t i = 0; i < s.gates.size(); ++i) {
-    check_gate_fits(s, s.gates[i], s.pools[i + 1], "gates[" + std::to_string(i) + "]");
+    check_gate_fits(v, s.gates[i], s.pools[i + 1], "gates[" + std::to_string(i) + "]");
   }
   if (s.downstream.kind == DownstreamKind::gate) {
-    check_gate_fits(s, s.downstream.gate, s.pools.back(), "downstream.gate");
+    check_gate_fits(v, s.downstream.gate, s.pools.back(), "downstream.gate");
   }
   if (!s.head_gate && s.upstream.kind != UpstreamKind::discharge) {
-    invalid(s, "upstream.kind", "a level, reservoir or recorded upstream needs a [head_gate]; "
+    v.invalid("upstream.kind", "a level, reservoir or recorded upstream needs a [head_gate]; "
                                 "expected kind = \"discharge\" without one");
   }
   int controlled = (s.head_gate && s.head_gate->controlled) ? 1 : 0;
   for (const auto& g : s.gates) controlled += g.controlled ? 1 : 0;
   if (s.downstream.kind == DownstreamKind::gate && s.downstream.gate.controlled) ++controlled;
-  if (controlled > 1) invalid(s, "controlled", "more than one gate has controlled = true: expected at most one");
+  if (controlled > 1) v.invalid("controlled", "more than one gate has controlled = true: expected at most one");
   const double last_length = s.pools.back().length_m;
   if (s.sensors.downstream_sensor_x_m > last_length) {
-    invalid(s, "sensors.downstream_sensor_x_m", "expected at most the last pool's length (" +
-                                                    std::to_string(last_length) + " m)");
+    v.invalid("sensors.downstream_sensor_x_m", "= " + number(s.sensors.downstream_sensor_x_m) +
+                                                    " m: expected at most the last pool's length (" +
+                                                    number(last_length) + " m)");
   }
   const GateSpec* driven = nullptr;
   if (s.head_gate && s.head_gate->controlled) driven = &*s.head_gate;
@@ -283,39 +323,38 @@ void validate(const Scenario& s) {
     const auto& e = s.experiments[i];
     const std::string key = "experiments[" + std::to_string(i) + "]";
     if (!driven && e.input.kind != InputKind::constant) {
-      invalid(s, key + ".input.kind", "an experiment with an input signal needs a gate with controlled = true; "
+      v.invalid(key + ".input.kind", "an experiment with an input signal needs a gate with controlled = true; "
                                       "expected kind = \"constant\" without one");
     }
     const double max_mm = driven ? driven->max_opening_m * 1000.0 : 0.0;
     if (driven && e.operating_opening_mm > max_mm) {
-      invalid(s, key + ".operating_opening_mm", "= " + std::to_string(e.operating_opening_mm) +
+      v.invalid(key + ".operating_opening_mm", "= " + number(e.operating_opening_mm) +
                                                     " mm: expected at most the gate's max_opening_m (" +
-                                                    std::to_string(max_mm) + " mm)");
+                                                    number(max_mm) + " mm)");
     }
     for (std::size_t j = 0; j < i; ++j) {
-      if (s.experiments[j].name == e.name) invalid(s, key + ".name", "'" + e.name + "' is used twice");
+      if (s.experiments[j].name == e.name) v.invalid(key + ".name", "'" + e.name + "' is used twice");
     }
   }
 }
+
+void validate(const Scenario& s) { validate(s, nullptr); }
 
 Scenario parse_scenario(const std::string& toml_text, const std::string& source) {
   toml::table root;
   try {
     root = toml::parse(toml_text, source);
   } catch (const toml::parse_error& e) {
-    throw InputError(source + ":" + std::to_string(e.source().begin.line) + ": " + std::string(e.description()));
+    throw InputError(source + ":" + std::to_string(e.source().begin.line) + ": not valid TOML (" +
+                     std::string(e.description()) + "); expected key = value lines and [tables], see docs/scenarios.md");
   }
   Scenario s = read_scenario(TomlTable(root, source, ""), source);
-  validate(s);
+  validate(s, &root);
   return s;
 }
 
 Scenario load_scenario(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open the scenario file for reading");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), file.string());
+  return parse_scenario(read_text_file(file, "scenario file"), file.string());
 }
 
 }  // namespace canalsim::scenarios

@@ -225,7 +225,7 @@ std::function<double(double)> command_signal(const ExperimentSpec& e, const Driv
       signal = std::make_shared<RampSignal>(op, in.amplitude_mm * kMm, in.start_s, in.ramp_duration_s);
       break;
     case InputKind::file: {
-      const Recording rec = read_recording(in.file);
+      const Recording rec = read_recording(in.file, input_series_columns());
       signal = std::make_shared<SeriesSignal>(
           SeriesSignal::from_recording(rec, columns::gate_command, Interpolation::zero_order_hold));
       break;
@@ -312,14 +312,15 @@ struct InitialState {
 };
 
 // Brings the canal to the steady state of its operating point at t = 0 and presets the
-// reservoir PID so that the pump delivers the gate discharge.
-InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& options,
+// reservoir PID so that the pump delivers the gate discharge. Newton first; then the experiment's
+// settle_s of unrecorded marching (the command held at its operating point), or, when Newton is
+// off or fails, the longer of that and options.settle_time.
+InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options,
                     const std::function<void(double)>& report) {
   InitialState result;
-  const double t_settle = -std::max(options.settle_time, 0.0);
-  const double t_before = std::min(t_settle, -1e-9);  // strictly before the input starts
-  b.canal.set_time(t_before);
-  b.controlled->reset(t_before, b.controlled->command(t_before));
+  const double before_input = -1e-9;  // strictly before the input starts
+  b.canal.set_time(before_input);
+  b.controlled->reset(before_input, b.controlled->command(before_input));
   std::string newton_failure;
   if (options.use_steady_state_solver) {
     solver::SteadyStateOptions steady;
@@ -331,6 +332,12 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& opt
       newton_failure = summary.status.message();
     }
   }
+  const bool solved = !result.description.empty();
+  const double marching = solved ? e.settle_s : std::max({options.settle_time, e.settle_s, 0.0});
+  if (marching > 0.0) {
+    b.canal.set_time(-marching);
+    b.controlled->reset(-marching, b.controlled->command(-marching));
+  }
   if (b.head_gate) {
     // The first sample's discharge: the gate has passed no step yet, so report the steady flow.
     const double q = b.canal.reach(0).discharge().front();
@@ -341,16 +348,16 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const SimulateOptions& opt
     // Likewise the gates between pools: the steady flow entering the next pool.
     b.gate_links[i]->on_step_accepted(b.canal.time(), 0.0, b.canal.reach(static_cast<int>(i) + 1).discharge().front());
   }
-  if (result.description.empty()) {
+  if (marching > 0.0) {
     // Time marching: chunks for the progress line.
-    const double duration = -t_before;
     result.progress_weight = 0.5;
     for (int k = 1; k <= 20; ++k) {
-      check(b.canal.advance_to(t_before + duration * k / 20.0), "settling");
+      check(b.canal.advance_to(-marching + marching * k / 20.0), "settling");
       report(result.progress_weight * k / 20.0);
     }
-    result.description = "time marching " + format_number(duration) + " s" +
-                         (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
+    const std::string marched = "time marching " + format_number(marching) + " s";
+    result.description = solved ? result.description + ", then " + marched
+                                : marched + (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
   }
   b.canal.set_time(0.0);
   b.canal.reset_balance();
@@ -371,7 +378,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   const auto report = [&](double fraction) {
     if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
   };
-  const InitialState initial = settle(b, s, options, report);
+  const InitialState initial = settle(b, s, e, options, report);
 
   // Sampling: every channel read at t_k = k h from the true state, then through its sensor.
   const double h = sensors.period_s;

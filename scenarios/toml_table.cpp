@@ -37,8 +37,13 @@ bool Range::contains(double v) const {
 }
 
 std::string Range::describe() const {
-  return std::string(min_open ? "(" : "[") + format_value(min) + ", " + format_value(max) +
-         (max_open ? ")" : "]");
+  // An unbounded side is open whatever the flag says: no finite number reaches infinity.
+  std::string text(std::isinf(min) ? "(-∞" : (min_open ? "(" : "["));
+  if (!std::isinf(min)) text.append(format_value(min));
+  text.append(", ");
+  if (!std::isinf(max)) text.append(format_value(max));
+  text.append(std::isinf(max) ? "∞)" : (max_open ? ")" : "]"));
+  return text;
 }
 
 TomlTable::TomlTable(const toml::table& table, std::string file, std::string path)

@@ -271,7 +271,7 @@ TEST(AsceInput, EventOnAPoolThatDoesNotExistIsOneLine) {
 
 TEST(AsceInput, AnInputSignalWithoutAControlledGateIsNamed) {
   EXPECT_EQ(error_of(replaced(kTwoPools, "kind = \"constant\"", "kind = \"prbs\"")),
-            "two.toml: experiments[0].input.kind: an experiment with an input signal needs a gate with "
+            "two.toml:39: experiments[0].input.kind: an experiment with an input signal needs a gate with "
             "controlled = true; expected kind = \"constant\" without one");
 }
 
