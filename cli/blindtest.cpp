@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "diagnosis/blindtest.hpp"
@@ -29,6 +30,7 @@ struct BlindtestArguments {
 };
 
 void run(const BlindtestArguments& args) {
+  check_output_file("--json", args.json);  // written after every trial has run
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   diagnosis::BlindtestOptions options;
   options.trials = args.trials;
@@ -65,17 +67,30 @@ void run(const BlindtestArguments& args) {
   }
 }
 
+// 0 means the full experiment; shorter than 20 s leaves too few PRBS periods to diagnose
+// (BlindtestOptions::validate).
+CLI::Validator duration_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = -1.0;
+        if (detail::parse_number(text, v) && (v == 0.0 || v >= 20.0)) return "";
+        return "expected a number of seconds >= 20 (or 0 for the full experiments), got " + text;
+      },
+      "0 or >= 20");
+}
+
 }  // namespace
 
 void add_blindtest_command(CLI::App& app) {
   auto args = std::make_shared<BlindtestArguments>();
   auto* cmd = app.add_subcommand("blindtest", "Conceal effects in simulated experiments and score the diagnosis");
-  cmd->add_option("--trials", args->trials, "Number of trials (default 40)")->check(CLI::Range(1, 100000));
+  cmd->add_option("--trials", args->trials, "Number of trials (default 40)")->check(integer_in(1, 100000, "a number of trials"));
   cmd->add_option("--seed", args->seed, "Random seed (default 1)");
   cmd->add_option("--json", args->json, "Write per-trial results and the summary as JSON");
   cmd->add_option("--scenario", args->scenario, "Scenario (default: the built-in lab canal)");
-  cmd->add_option("--threads", args->threads, "Trials in parallel (default 2)")->check(CLI::Range(1, 64));
-  cmd->add_option("--duration", args->duration, "Shorten every experiment to this many seconds (default: full)");
+  cmd->add_option("--threads", args->threads, "Trials in parallel (default 2)")->check(thread_count());
+  cmd->add_option("--duration", args->duration, "Shorten every experiment to this many seconds, >= 20 (default: full)")
+      ->check(duration_check());
   cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial (default op1 op2 op3 op4)");
   cmd->add_option("--effects", args->effects, "Draw only these effects (and none); default the whole catalog");
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
@@ -83,7 +98,7 @@ void add_blindtest_command(CLI::App& app) {
                   "Diagnose against this reduced model instead of the scenario (draws gate_rate_limit and "
                   "sensor_quantization unless --effects says otherwise)");
   cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm in the model (default 0.05)")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(number_in(0.0, 100.0, "a resolution in mm"));
   cmd->callback([args] { run(*args); });
 }
 

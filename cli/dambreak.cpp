@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "scenarios/recording.hpp"
 #include "solver/canal.hpp"
@@ -46,6 +47,7 @@ void run_dambreak(int cells, double t_end, bool dry, const std::string& output) 
     text << "--time " << t_end << ": expected a positive number of seconds";
     throw InputError(text.str());
   }
+  check_output_file("-o", output);  // before the run, like every argument
   const double h_right = dry ? 0.0 : 0.1;
 
   // Setup: one reach, water at rest behind the dam at x = 10 m, transmissive ends.

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "diagnosis/diagnose.hpp"
@@ -37,16 +38,18 @@ struct DiagnoseArguments {
   bool no_clock = false;
 };
 
-std::vector<Recording> read_all(const std::vector<std::string>& files, std::string& problems) {
+// Stops at the first unreadable recording: its error names the file and line, and the next
+// file's problem (or a "no recordings" that only follows from the first) would be noise.
+std::vector<Recording> read_all(const std::vector<std::string>& files) {
   std::vector<Recording> recordings;
-  for (const auto& file : files) {
-    try {
-      recordings.push_back(read_recording(file));
-    } catch (const InputError& e) {
-      problems += std::string(problems.empty() ? "" : "\n") + e.what();
-    }
-  }
+  for (const auto& file : files) recordings.push_back(read_recording(file));
   return recordings;
+}
+
+// Outputs are written at the end of a diagnosis that can take minutes: check their places first.
+void check_outputs(const DiagnoseArguments& args) {
+  check_output_file("--json", args.json);
+  check_output_file("--report", args.report);
 }
 
 int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title) {
@@ -67,9 +70,7 @@ int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, 
 }
 
 int run_model(const DiagnoseArguments& args) {
-  std::string problems;
-  const std::vector<Recording> recordings = read_all(args.recordings, problems);
-  if (!problems.empty()) throw InputError(problems);
+  const std::vector<Recording> recordings = read_all(args.recordings);
   diagnosis::ModelDiagnoseOptions options;
   options.kind = reduced::require_model_kind(args.model);
   options.candidates = args.candidates;
@@ -88,15 +89,14 @@ int run(const DiagnoseArguments& args) {
   if (args.scenario.empty() == args.model.empty()) {
     throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
   }
+  check_outputs(args);
   if (!args.model.empty()) return run_model(args);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
-  // Read every recording first and report all that fail, so the user fixes them in one go.
-  std::string problems;
-  std::vector<Recording> recordings = read_all(args.recordings, problems);
-  for (const auto& p : diagnosis::check_recordings(s, recordings)) {
-    problems += std::string(problems.empty() ? "" : "\n") + p;
+  // One line for the first problem (it names the recording); the user reruns to see the next.
+  std::vector<Recording> recordings = read_all(args.recordings);
+  if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
+    throw InputError(problems.front() + " (scenario " + s.name + ")");
   }
-  if (!problems.empty()) throw InputError("recordings do not match scenario " + s.name + ":\n" + problems);
 
   diagnosis::DiagnoseOptions options;
   options.candidates = args.candidates;
@@ -120,18 +120,19 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--model", args->model,
                   "Diagnose a reduced model instead (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid)");
   cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm already in the model (eq. 17)")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(number_in(0.0, 100.0, "a resolution in mm"));
   cmd->add_option("--gate-speed", args->gate_speed_mm_s, "--model: gate speed in mm/s already in the model (eq. 16)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(number_in(0.0, 1e6, "a speed in mm/s"));
   cmd->add_option("--upstream-level", args->upstream_level_mm,
-                  "--model: constant upstream level in mm for recordings without y_up_mm");
+                  "--model: constant upstream level in mm for recordings without y_up_mm")
+      ->check(positive_number("a level in mm"));
   cmd->add_option("recordings", args->recordings, "Recording CSV files")->required();
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
   cmd->add_option("--candidates", args->candidates, "Catalog effects to try (default: all)");
   cmd->add_option("--fit-fraction", args->fit_fraction, "Leading share of each recording used for fitting (default 0.5)")
-      ->check(CLI::Range(0.11, 0.89));
-  cmd->add_option("--threads", args->threads, "Recordings simulated in parallel (default 2)")->check(CLI::Range(1, 64));
+      ->check(number_in(0.11, 0.89, "a fraction"));
+  cmd->add_option("--threads", args->threads, "Recordings simulated in parallel (default 2)")->check(thread_count());
   cmd->add_flag("--recorded-upstream", args->recorded_upstream,
                 "Drive the head gate with the recorded y_up_mm instead of the scenario's upstream model");
   cmd->add_flag("--no-clock", args->no_clock,

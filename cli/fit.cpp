@@ -19,6 +19,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "reduced_models/identification.hpp"
 #include "scenarios/recording.hpp"
@@ -144,7 +145,15 @@ void print_table(const std::string& title, const std::vector<std::string>& names
   }
 }
 
+// Δp (eq. 22) is relative to the nominal value: undefined when that is 0 (γ = 0 in particular), so
+// say so rather than print "inf%" (the study's markdown tables write "∞ (nominal 0)").
+std::string uncertainty_text(double dp, double nominal) {
+  if (nominal == 0.0 || !std::isfinite(dp)) return "undefined (nominal 0)";
+  return fixed(100.0 * dp, 2) + "%";
+}
+
 void run_fit(const FitArguments& args) {
+  check_output_file("--json", args.json);  // written after all the fits
   const ModelKind kind = require_model_kind(args.model);
   std::optional<GammaGrid> grid;
   if (!args.gamma.empty()) {
@@ -228,7 +237,9 @@ void run_fit(const FitArguments& args) {
     for (const auto& f : fits) models.push_back(f.model);
     dp = uncertainty_indices(models, nominal->model);
     std::cout << "  uncertainty index dp (eq. 22):";
-    for (const auto& n : names) std::cout << "  " << n << " " << fixed(100.0 * dp[n], 2) << "%";
+    for (const auto& n : names) {
+      std::cout << "  " << n << " " << uncertainty_text(dp[n], get_parameter(nominal->model.p, n));
+    }
     std::cout << "\n";
   }
 
@@ -272,24 +283,28 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--model,-m", args->model, "Model to fit")->required();
   cmd->add_option("recordings", args->recordings, "Recording CSV files (t_s, u_mm, y_dwe_mm; "
                                                   "y_up_mm for the nonlinear models)")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();  // a missing file is reported by the reader, naming it, like every file error
   cmd->add_flag("--nominal", args->nominal,
                 "Also fit one nominal model to all recordings (IAE_c, eq. 21) and report dp (eq. 22)");
   cmd->add_option("--gamma", args->gamma,
                   "Sweep gamma over first:last:step (e.g. 0:10:0.05) and keep the best Nrmse");
   cmd->add_option("--json", args->json, "Write parameters, IAE, Nrmse and responses as JSON");
+  // Flag values are checked here so that errors name the flag, not the library's option field.
   cmd->add_option("--upstream-level", args->upstream_level_mm,
-                  "Constant upstream level in mm for recordings without y_up_mm");
+                  "Constant upstream level in mm for recordings without y_up_mm")
+      ->check(positive_number("a level in mm"));
   cmd->add_option("--quantum", args->quantum_mm,
-                  "Sensor resolution in mm included in the model output (eq. 17; 0 = off)");
+                  "Sensor resolution in mm included in the model output (eq. 17; 0 = off)")
+      ->check(number_in(0.0, 100.0, "a resolution in mm"));
   cmd->add_option("--gate-speed", args->gate_speed_mm_s,
-                  "Gate speed in mm/s for the rate limit (eq. 16; 0 = off)");
+                  "Gate speed in mm/s for the rate limit (eq. 16; 0 = off)")
+      ->check(number_in(0.0, 1e6, "a speed in mm/s"));
   cmd->add_option("--memory", args->memory, "GL memory: short (N terms, paper) or full")
       ->capture_default_str();
   cmd->add_option("--memory-terms", args->memory_terms, "N for the short memory (paper: 500)")
-      ->capture_default_str();
-  cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 100000000, "a number of terms"));
+  cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(thread_count());
   cmd->callback([args] { run_fit(*args); });
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "scenarios/prbs.hpp"
 #include "scenarios/recording.hpp"
@@ -58,10 +59,11 @@ void print_design(const PrbsDesign& d, const PrbsArguments& args) {
   std::snprintf(buffer, sizeof buffer, "  %-24s %d  (N = 2^n - 1 = %zu bits, seed %llu)\n",
                 "stages n", d.stages, d.length, static_cast<unsigned long long>(args.seed));
   std::cout << buffer;
-  std::snprintf(buffer, sizeof buffer, "  %-24s %.6g s  (clock frequency %.6g Hz)\n",
+  std::snprintf(buffer, sizeof buffer, "  %-24s %.10g s  (clock frequency %.6g Hz)\n",
                 "clock period Tc", d.clock_period, d.clock_frequency);
   std::cout << buffer;
-  std::snprintf(buffer, sizeof buffer, "  %-24s %.6g s\n", "period T = N Tc", d.period);
+  // %.10g: N Tc is exact (e.g. 1048575 x 0.5 = 524287.5 s) and %.6g would round it.
+  std::snprintf(buffer, sizeof buffer, "  %-24s %.10g s\n", "period T = N Tc", d.period);
   std::cout << buffer;
   std::cout << line("first spectral null", d.first_null)
             << line("-3 dB band (sinc^2)", d.bandwidth_3db)
@@ -107,6 +109,7 @@ void add_prbs_command(CLI::App& app) {
   cmd->add_option("-o,--output", args->output, "write one period as CSV t_s,u_mm to this file");
   cmd->callback([args] {
     check_arguments(*args);
+    check_output_file("-o", args->output);
     PrbsOptions options;
     options.stages = args->stages;
     options.clock_period = args->clock_s;

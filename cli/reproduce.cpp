@@ -23,6 +23,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "reduced_models/study.hpp"
 #include "scenarios/builtin.hpp"
@@ -204,8 +205,8 @@ void add_reproduce_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--gamma-step", args->gamma_step, "Step of the gamma sweep over [0, 10]")
       ->capture_default_str()
-      ->check(CLI::Range(0.001, 10.0));
-  cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(CLI::Range(1u, 64u));
+      ->check(number_in(0.001, 10.0, "a step"));
+  cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(thread_count());
   cmd->callback([args] { run_reproduce(*args); });
 }
 

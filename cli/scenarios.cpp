@@ -4,9 +4,24 @@
 
 #include "cli/commands.hpp"
 #include "scenarios/builtin.hpp"
+#include "scenarios/recording.hpp"
 #include "scenarios/scenario_toml.hpp"
 
 namespace canalsim::cli {
+namespace {
+
+// --show prints only built-in scenarios (a file is already there to read), so the message lists
+// just their names — the library's own error also offers "a path to a .toml file".
+const scenarios::BuiltinScenario& require_builtin(const std::string& name) {
+  std::string names;
+  for (const auto& b : scenarios::builtin_scenarios()) {
+    if (b.name == name) return b;
+    names += (names.empty() ? "" : ", ") + b.name;
+  }
+  throw InputError("--show " + name + ": expected the name of a built-in scenario: " + names);
+}
+
+}  // namespace
 
 void add_scenarios_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("scenarios", "List the built-in scenarios, or print one as TOML");
@@ -14,10 +29,7 @@ void add_scenarios_command(CLI::App& app) {
   cmd->add_option("--show", *show, "Print the built-in scenario NAME as TOML (redirect it to a file to edit it)");
   cmd->callback([show] {
     if (!show->empty()) {
-      scenarios::builtin_scenario(*show);  // validates the name, with the list of names on error
-      for (const auto& b : scenarios::builtin_scenarios()) {
-        if (b.name == *show) std::cout << b.toml;
-      }
+      std::cout << require_builtin(*show).toml;
       return;
     }
     for (const auto& b : scenarios::builtin_scenarios()) {

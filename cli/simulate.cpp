@@ -3,7 +3,11 @@
 // (docs/recording-format.md).
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <string>
+#include <vector>
 
+#include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "scenarios/builtin.hpp"
@@ -17,9 +21,11 @@ struct SimulateArguments {
   std::string scenario;
   std::vector<std::string> experiments;
   std::string output;
-  std::string out_dir = ".";
+  std::string out_dir;  // empty: not given (the current directory, unless -o)
 };
 
+// The recording file name of an experiment under --out-dir (docs/recording-format.md): `*` reads
+// as "star" in the paper's names (op1*), '/' and ' ' would make a path or need quoting.
 std::string safe_file_name(std::string name) {
   for (char& c : name) {
     if (c == '*') c = 's';  // op1* -> op1s
@@ -28,8 +34,8 @@ std::string safe_file_name(std::string name) {
   return name;
 }
 
-void run(const SimulateArguments& args) {
-  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+std::vector<const scenarios::ExperimentSpec*> choose_experiments(const scenarios::Scenario& s,
+                                                                  const SimulateArguments& args) {
   std::vector<const scenarios::ExperimentSpec*> chosen;
   for (const auto& name : args.experiments) {
     const auto* e = s.find_experiment(name);
@@ -44,24 +50,61 @@ void run(const SimulateArguments& args) {
     for (const auto& e : s.experiments) chosen.push_back(&e);
   }
   if (chosen.empty()) throw InputError(args.scenario + ": the scenario has no [[experiments]]");
+  return chosen;
+}
+
+// One file per experiment under --out-dir. Two experiments mapping to the same file (op1* and
+// op1s both -> op1s.csv) would silently overwrite each other, so that is refused before any
+// simulation runs.
+std::vector<std::filesystem::path> output_files(const std::vector<const scenarios::ExperimentSpec*>& chosen,
+                                                const SimulateArguments& args) {
+  if (!args.output.empty()) return {std::filesystem::path(args.output)};
+  const std::filesystem::path dir = args.out_dir.empty() ? "." : args.out_dir;
+  std::map<std::string, std::string> owner;  // file name -> experiment
+  std::vector<std::filesystem::path> files;
+  for (const auto* e : chosen) {
+    const std::string file = safe_file_name(e->name) + ".csv";
+    const auto [it, fresh] = owner.emplace(file, e->name);
+    if (!fresh && it->second == e->name) throw InputError("--experiment " + e->name + ": given twice");
+    if (!fresh) {
+      throw InputError("--out-dir: experiments '" + it->second + "' and '" + e->name + "' would both be written to " +
+                       (dir / file).string() + "; run them separately with -e NAME -o FILE");
+    }
+    files.push_back(dir / file);
+  }
+  return files;
+}
+
+// Every argument problem is reported before the first (possibly long) simulation starts.
+void check_outputs(const std::vector<const scenarios::ExperimentSpec*>& chosen, const SimulateArguments& args) {
+  if (!args.output.empty() && !args.out_dir.empty()) {
+    throw InputError("-o " + args.output + " and --out-dir " + args.out_dir +
+                     ": give one (-o writes one recording, --out-dir one per experiment)");
+  }
   if (!args.output.empty() && chosen.size() != 1) {
     throw InputError("-o writes one recording: choose one experiment with --experiment, or use --out-dir");
   }
-  if (args.output.empty() && !std::filesystem::is_directory(args.out_dir)) {
-    throw InputError(args.out_dir + ": --out-dir is not an existing directory");
-  }
-  for (const auto* e : chosen) {
+  if (!args.output.empty()) check_output_file("-o", args.output);
+  if (!args.out_dir.empty()) check_creatable_directory("--out-dir", args.out_dir);
+}
+
+void run(const SimulateArguments& args) {
+  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  const auto chosen = choose_experiments(s, args);
+  check_outputs(chosen, args);
+  const auto files = output_files(chosen, args);
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    const auto* e = chosen[i];
     scenarios::SimulateOptions options;
     Progress progress("simulating " + s.name + "/" + e->name);
     options.progress = [&progress](double f) { progress.update(f); };
     const Recording rec = scenarios::simulate(s, *e, options);
     progress.finish();
-    const std::filesystem::path file =
-        args.output.empty() ? std::filesystem::path(args.out_dir) / (safe_file_name(e->name) + ".csv")
-                            : std::filesystem::path(args.output);
-    write_recording(file, rec);
-    std::cout << "wrote " << file.string() << " (" << rec.size() << " samples, "
-              << rec.sample_period() << " s)\n";
+    // Created only now, so that a run that fails in its first simulation leaves no directory.
+    if (i == 0 && !args.out_dir.empty()) create_directory_for("--out-dir", args.out_dir);
+    write_recording(files[i], rec);
+    std::cout << "wrote " << files[i].string() << " (" << rec.size() << " samples, " << rec.sample_period()
+              << " s)\n";
   }
 }
 
@@ -72,8 +115,10 @@ void add_simulate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "Run experiments of a scenario and write recordings (CSV)");
   cmd->add_option("scenario", args->scenario, "Built-in scenario name (see `canalsim scenarios`) or TOML file")->required();
   cmd->add_option("--experiment,-e", args->experiments, "Experiment(s) to run (default: all)");
-  cmd->add_option("-o,--output", args->output, "Recording file for a single experiment");
-  cmd->add_option("--out-dir", args->out_dir, "Directory for the recordings, one NAME.csv each (default: .)");
+  cmd->add_option("-o,--output", args->output, "Recording file for a single experiment (not with --out-dir)");
+  cmd->add_option("--out-dir", args->out_dir,
+                  "Directory for the recordings, created if missing; one NAME.csv each, '*' in NAME written "
+                  "as 's' (op1* -> op1s.csv) (default: .)");
   cmd->callback([args] { run(*args); });
 }
 

@@ -250,14 +250,18 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
   s << "\n(rate = gate_rate_limit, quant = sensor_quantization, delay = sensor_delay, offset = sensor_offset,\n"
        " leak = gate_leakage, Cd = discharge_coefficient, fric = friction, lateral = lateral_outflow,\n"
        " dgate = downstream_gate, unexpl = unexplained)\n\n";
+  // A rate over no clean trials is undefined, not 0%.
+  char rate[64];
+  std::snprintf(rate, sizeof rate, "%d/%d = %.1f%%", r.false_alarms, r.clean_trials, 100.0 * r.false_alarm_rate);
+  const std::string false_alarms = r.clean_trials > 0 ? rate : "n/a (no clean trials)";
   std::snprintf(buf, sizeof buf,
                 "top-1 accuracy          %d/%zu = %.1f%% (effect trials %d/%d)\n"
-                "false alarms (clean)    %d/%d = %.1f%%\n"
+                "false alarms (clean)    %s\n"
                 "parameter error         median %.1f%%, max %.1f%%, within 25%%: %d/%d correct attributions\n"
                 "held-out Nrmse gain     mean %+.2f points, min %+.2f, improved in %d/%d correct attributions\n"
                 "time                    %.1f s total, %.1f s per trial (one diagnosis of %zu recordings + their simulation)\n",
-                r.correct, r.trials.size(), 100.0 * r.accuracy, r.effect_correct, r.effect_trials, r.false_alarms,
-                r.clean_trials, 100.0 * r.false_alarm_rate, 100.0 * r.median_parameter_error,
+                r.correct, r.trials.size(), 100.0 * r.accuracy, r.effect_correct, r.effect_trials,
+                false_alarms.c_str(), 100.0 * r.median_parameter_error,
                 100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.mean_heldout_gain, r.min_heldout_gain,
                 r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;

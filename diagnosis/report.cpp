@@ -174,20 +174,23 @@ std::string text_summary(const Diagnosis& d) {
   s << "verdict: " << d.verdict << "  (" << d.reason << ")\n";
   s << "noise " << fixed(d.noise, 3) << " mm, nominal residual RMS " << fixed(d.nominal_rms, 3)
     << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n\n";
-  char line[256];
-  std::snprintf(line, sizeof line, "%-22s %7s %4s %22s %9s %9s %9s %9s %8s\n", "effect", "score", "sig", "parameter",
-                "Nrmse fit", "after", "held-out", "after", "dBIC");
+  // The name column fits the longest effect name (upstream_level_variation is 24 characters).
+  int width = 22;
+  for (const auto& e : d.effects) width = std::max(width, static_cast<int>(e.name.size()));
+  char line[320];
+  std::snprintf(line, sizeof line, "%-*s %7s %4s %22s %9s %9s %9s %9s %8s\n", width, "effect", "score", "sig",
+                "parameter", "Nrmse fit", "after", "held-out", "after", "dBIC");
   s << line;
   for (const auto& e : d.effects) {
     if (e.parameter.name.empty() && !e.note.empty()) {  // not tried: say why instead of zeros
-      s << std::string(e.name) + std::string(e.name.size() < 22 ? 22 - e.name.size() : 0, ' ') << "   -- "
-        << e.note << '\n';
+      std::snprintf(line, sizeof line, "%-*s   -- ", width, e.name.c_str());
+      s << line << e.note << '\n';
       continue;
     }
     const std::string p = fixed(e.parameter.value, 3) + " +- " + fixed(e.parameter.std, 3) + " " + e.parameter.unit;
-    std::snprintf(line, sizeof line, "%-22s %7.3f %4s %22s %9.2f %9.2f %9.2f %9.2f %8.0f\n", e.name.c_str(), e.score,
-                  e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after, e.heldout_nrmse_before,
-                  e.heldout_nrmse_after, e.delta_bic);
+    std::snprintf(line, sizeof line, "%-*s %7.3f %4s %22s %9.2f %9.2f %9.2f %9.2f %8.0f\n", width, e.name.c_str(),
+                  e.score, e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after,
+                  e.heldout_nrmse_before, e.heldout_nrmse_after, e.delta_bic);
     s << line;
   }
   s << "\nwhere the nominal residual lives:\n";
