@@ -49,7 +49,7 @@ std::string BlindtestOptions::validate() const {
   else {
     for (const auto& e : effects) {
       if (!effect_from_name(e)) {
-        out << "effects: unknown effect '" << e << "'";
+        out << "effects: unknown effect '" << e << "' (expected one of " << catalog_names() << ")";
         break;
       }
     }

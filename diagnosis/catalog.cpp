@@ -42,6 +42,12 @@ const EffectInfo& info(Effect effect) {
   throw std::logic_error("diagnosis: effect missing from the catalog");
 }
 
+std::string catalog_names() {
+  std::string names;
+  for (const auto& e : catalog()) names += (names.empty() ? "" : ", ") + std::string(e.name);
+  return names;
+}
+
 std::optional<Effect> effect_from_name(const std::string& name) {
   for (const auto& e : catalog()) {
     if (name == e.name) return e.effect;

@@ -58,6 +58,8 @@ struct EffectInfo {
 const std::vector<EffectInfo>& catalog();
 const EffectInfo& info(Effect effect);
 std::optional<Effect> effect_from_name(const std::string& name);
+// "a, b, ..., z": the catalog's effect names, for messages that reject an unknown one.
+std::string catalog_names();
 
 // Parameter value (user units) ↔ internal coordinate θ.
 double to_parameter(Effect effect, double theta);

@@ -853,7 +853,7 @@ std::string DiagnoseOptions::validate() const {
   else {
     for (const auto& c : candidates) {
       if (!effect_from_name(c)) {
-        out << "candidates: unknown effect '" << c << "'";
+        out << "candidates: unknown effect '" << c << "' (expected one of " << catalog_names() << ")";
         break;
       }
     }

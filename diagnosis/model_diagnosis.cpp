@@ -516,7 +516,9 @@ std::string ModelDiagnoseOptions::validate() const {
     const auto known = model_effect_names();
     for (const auto& c : candidates) {
       if (std::find(known.begin(), known.end(), c) == known.end()) {
-        out << "candidates: unknown effect '" << c << "'";
+        std::string names;
+        for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
+        out << "candidates: unknown effect '" << c << "' (expected one of " << names << ")";
         break;
       }
     }
