@@ -10,7 +10,7 @@
 #include "diagnosis/blindtest.hpp"
 #include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::cli {
 namespace {

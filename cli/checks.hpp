@@ -17,7 +17,7 @@
 #include <system_error>
 #include <unistd.h>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::cli {
 

@@ -11,7 +11,7 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "solver/canal.hpp"
 
 namespace canalsim::cli {

@@ -17,7 +17,7 @@
 #include "reduced_models/models.hpp"
 #include "diagnosis/report.hpp"
 #include "scenarios/builtin.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::cli {
 namespace {

@@ -22,7 +22,7 @@
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "reduced_models/identification.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::cli {
 namespace {

@@ -12,7 +12,7 @@
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "scenarios/prbs.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::cli {
 namespace {

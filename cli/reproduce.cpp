@@ -28,7 +28,7 @@
 #include "reduced_models/study.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/prbs.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::cli {

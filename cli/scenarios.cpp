@@ -4,7 +4,7 @@
 
 #include "cli/commands.hpp"
 #include "scenarios/builtin.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/scenario_toml.hpp"
 
 namespace canalsim::cli {

@@ -11,7 +11,7 @@
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "scenarios/builtin.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::cli {

@@ -28,7 +28,7 @@
 #include "diagnosis/catalog.hpp"
 #include "diagnosis/locate.hpp"
 #include "diagnosis/residual_tests.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::diagnosis {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::reduced {
 

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::reduced {
 namespace {

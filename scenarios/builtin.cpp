@@ -2,7 +2,7 @@
 
 #include <filesystem>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/scenario_toml.hpp"
 
 namespace canalsim::scenarios {

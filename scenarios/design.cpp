@@ -6,7 +6,7 @@
 #include <string>
 
 #include "gates/sluice_gate.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/toml_table.hpp"
 
 namespace canalsim::scenarios {

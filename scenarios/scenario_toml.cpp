@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/toml_table.hpp"
 
 namespace canalsim::scenarios {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim {
 

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "gates/structures.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 #include "solver/canal.hpp"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::scenarios {
 std::string format_value(double v) {

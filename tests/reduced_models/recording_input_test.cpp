@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "reduced_models/data.hpp"
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::reduced {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <gtest/gtest.h>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::scenarios {
 namespace {

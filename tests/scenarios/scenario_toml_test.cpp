@@ -8,7 +8,7 @@
 #include <fstream>
 #include <unistd.h>
 
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 namespace canalsim::scenarios {
 namespace {

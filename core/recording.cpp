@@ -1,13 +1,13 @@
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
+
+#include "core/format.hpp"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <system_error>
-#include <unistd.h>
 
 namespace canalsim {
 namespace {
@@ -39,8 +39,6 @@ bool is_number(const std::string& text) {
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
   return !text.empty() && ec == std::errc() && ptr == text.data() + text.size();
 }
-
-std::string format_number(double value);
 
 double parse_cell(const std::string& text, const std::string& column, const std::string& source,
                   std::size_t line) {
@@ -74,21 +72,15 @@ void check_time_axis(const Recording& rec, const std::vector<std::size_t>& row_l
   for (std::size_t i = 1; i < t.size(); ++i) {
     const double step = t[i] - t[i - 1];
     if (!(step > 0.0)) {
-      fail(rec.source, row_lines[i], "t_s is not increasing (" + format_number(t[i - 1]) +
-                                         " then " + format_number(t[i]) + ")");
+      fail(rec.source, row_lines[i], "t_s is not increasing (" + format_g(t[i - 1], 10) +
+                                         " then " + format_g(t[i], 10) + ")");
     }
     if (std::abs(step - dt) > tolerance * dt) {
       fail(rec.source, row_lines[i],
-           "t_s is not uniformly sampled (step " + format_number(step) + " s, expected " +
-               format_number(dt) + " s, within " + format_number(100.0 * tolerance) + " %)");
+           "t_s is not uniformly sampled (step " + format_g(step, 10) + " s, expected " +
+               format_g(dt, 10) + " s, within " + format_g(100.0 * tolerance, 10) + " %)");
     }
   }
-}
-
-std::string format_number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", value);
-  return buffer;
 }
 
 }  // namespace
@@ -207,28 +199,6 @@ Recording parse_recording(const std::string& text, const std::string& source,
   return rec;
 }
 
-std::string read_text_file(const std::filesystem::path& file, const std::string& what) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) {
-    throw InputError(file.string() + ": cannot open the " + what + " for reading (no such file)");
-  }
-  if (std::filesystem::is_directory(status)) {
-    throw InputError(file.string() + ": is a directory, expected a " + what);
-  }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open the " + what + " for reading (permission denied?)");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  // A file stream reports a read error as an early end of file: compare with the size the file
-  // system gives, so that an I/O error does not pass for a short or empty file.
-  const auto size = std::filesystem::is_regular_file(status) ? std::filesystem::file_size(file, ec) : 0;
-  if (in.bad() || (!ec && buffer.str().size() < size)) {
-    throw InputError(file.string() + ": read error (I/O failure) on the " + what);
-  }
-  return buffer.str();
-}
-
 Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options) {
   return parse_recording(read_text_file(file, "recording"), file.string(), options);
 }
@@ -247,7 +217,7 @@ std::string format_recording(const Recording& rec) {
       if (rec.names[c] == columns::regime) {
         out += v >= 0.5 ? "submerged" : "free";
       } else {
-        out += format_number(v);
+        out += format_g(v, 10);
       }
     }
     out += "\n";
@@ -257,30 +227,6 @@ std::string format_recording(const Recording& rec) {
 
 void write_recording(const std::filesystem::path& file, const Recording& recording) {
   write_file_atomically(file, format_recording(recording));
-}
-
-void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
-  const std::filesystem::path temporary =
-      file.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
-    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw InputError(file.string() + ": write failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw InputError(file.string() + ": cannot replace the file: " + ec.message());
-  }
 }
 
 }  // namespace canalsim

@@ -1,6 +1,6 @@
 // Recording CSV format (docs/recording-format.md): parsing, validation messages, round trip and
 // atomic writes.
-#include "scenarios/recording.hpp"
+#include "core/recording.hpp"
 
 #include <filesystem>
 #include <fstream>

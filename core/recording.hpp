@@ -1,5 +1,5 @@
-// Recording: the uniformly sampled experiment record that simulations write and reduced models
-// and diagnosis read (format in docs/recording-format.md and ../shared/DESIGN.md).
+// Recording: the uniformly sampled experiment record that simulations write and reduced models,
+// calibration and diagnosis read (format in docs/recording-format.md).
 //
 // A recording file is CSV: optional leading "# key: value" metadata lines, one header line, then
 // uniformly sampled rows. Units are the paper's: seconds and millimetres, named in the column
@@ -9,19 +9,14 @@
 
 #include <cstddef>
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace canalsim {
+#include "core/errors.hpp"
+#include "core/files.hpp"
 
-// A user-facing input error. The message is one line that names the file (and line or key) and
-// what was expected; the CLI prints it as-is.
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+namespace canalsim {
 
 // Numeric codes of the `regime` column.
 enum class RegimeCode : int { free = 0, submerged = 1 };
@@ -79,17 +74,9 @@ Recording read_recording(const std::filesystem::path& file, const RecordingReadO
 Recording parse_recording(const std::string& text, const std::string& source,
                           const RecordingReadOptions& options = {});
 
-// The whole text of `file`. Throws InputError naming the file and `what` it is ("scenario file",
-// "recording") when it is missing, a directory, or fails to read (an I/O error is not an empty file).
-std::string read_text_file(const std::filesystem::path& file, const std::string& what);
-
 // Serialises a recording (metadata, header, rows; `regime` as free/submerged).
 std::string format_recording(const Recording& recording);
 // Writes atomically: a temporary file beside `file`, renamed over it when complete.
 void write_recording(const std::filesystem::path& file, const Recording& recording);
-
-// Writes `contents` to `file` through a temporary file and rename, so a failure never leaves a
-// partial file and never destroys an existing one. Throws InputError naming the file.
-void write_file_atomically(const std::filesystem::path& file, const std::string& contents);
 
 }  // namespace canalsim

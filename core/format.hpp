@@ -1,0 +1,15 @@
+// Numbers as people read them, in messages, tables and files: one formatter for the whole project.
+#pragma once
+
+#include <string>
+
+namespace canalsim {
+
+// printf's %g with `significant` digits: "0.05", "1e-09", "60.2". The default (6) is also what
+// an std::ostream prints; recordings use 10 so that a value survives the round trip to 1e-10.
+std::string format_g(double value, int significant = 6);
+
+// Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or nan.
+std::string format_fixed(double value, int decimals);
+
+}  // namespace canalsim

@@ -1,0 +1,47 @@
+// Progress of anything that takes seconds: one report type for every long operation, and one
+// printer that the CLI hands them to.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <mutex>
+#include <string>
+
+namespace canalsim {
+
+// What a long operation says as it goes: the share done in [0, 1] (negative when it cannot tell)
+// and a one-line message ("fitting LFOM to op1.csv").
+struct ProgressReport {
+  double fraction = -1.0;
+  std::string message;
+};
+
+// Options of long operations hold one of these; empty means nobody listens. It may be called from
+// several threads at once (the printer below locks).
+using ProgressCallback = std::function<void(const ProgressReport&)>;
+
+// A progress line on stderr, "LABEL [  3.2 s]: 42% message": rewritten in place on a terminal (at
+// most 10 times a second); on a pipe or file a line at most every 5 s, so logs stay readable.
+// The first report is always shown, so a user sees within moments that the work has started.
+class ProgressLine {
+ public:
+  explicit ProgressLine(std::string label);
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+  ~ProgressLine();
+
+  void report(const ProgressReport& report, bool force = false);
+  // A callback that forwards to report(); valid while this object lives.
+  ProgressCallback callback();
+  // Ends the in-place line on a terminal (called by the destructor).
+  void finish();
+
+ private:
+  std::mutex mutex_;
+  std::string label_;
+  bool tty_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point start_, last_;
+};
+
+}  // namespace canalsim
