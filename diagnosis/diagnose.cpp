@@ -1,5 +1,7 @@
 #include "diagnosis/diagnose.hpp"
 
+#include "core/laws.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -93,7 +95,7 @@ double at_fractional(const std::vector<double>& y, double index) {
   return y[k] + f * (y[k + 1] - y[k]);
 }
 
-double quantise_mm(double v, double r) { return r > 0.0 ? r * std::round(v / r) : v; }
+double quantise_mm(double v, double r) { return laws::quantise(v, r); }
 
 // The level sensors of `m` applied to sampled true levels (paper eq. 17 last).
 Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
@@ -120,10 +122,8 @@ Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
 std::vector<double> rate_limited_position(const Recording& drive, const std::vector<double>& samples, double speed_mm_s) {
   const auto& ct = drive.column(columns::time);
   const auto& cu = drive.column(columns::gate_command);
-  // An infinite speed (or inf * 0) is the ideal actuator: at the command.
-  auto move = [](double from, double to, double step) {
-    return std::isfinite(step) ? from + std::clamp(to - from, -step, step) : to;
-  };
+  // An infinite speed (or inf * 0) is the ideal actuator: at the command (laws::rate_limited_move).
+  const auto move = laws::rate_limited_move;
   std::vector<double> x;
   x.reserve(samples.size());
   double pos = cu.front(), now = ct.front();

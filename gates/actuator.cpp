@@ -1,5 +1,7 @@
 #include "gates/actuator.hpp"
 
+#include "core/laws.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -50,8 +52,7 @@ double GateActuator::advance(double dt, double command) {
     position_ = target;
   } else {
     // Exact solution of eq. (16) over dt: move at speed v, stop on the command.
-    const double travel = std::min(options_.speed * dt, std::abs(target - position_));
-    position_ += target > position_ ? travel : -travel;
+    position_ = laws::rate_limited_move(position_, target, options_.speed * dt);
     // Land exactly on the command: a remainder of round-off size would otherwise leave the gate a
     // few ulps short and moving at a tiny speed on the next step.
     if (std::abs(target - position_) <= arrival_tolerance) position_ = target;

@@ -1,5 +1,7 @@
 #include "gates/sluice_gate.hpp"
 
+#include "core/laws.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,8 +18,7 @@ const double critical_coefficient = std::pow(2.0 / 3.0, 1.5);
 constexpr double swamee_free_coefficient = 0.864;
 constexpr double swamee_contraction_exponent = 0.072;
 constexpr double swamee_jump_ratio = 15.0;
-constexpr double border_coefficient = 0.81;  // eq. (8), (10), (23)
-constexpr double border_exponent = 0.72;
+constexpr double border_exponent = laws::regime_border_exponent;  // eq. (8), (10), (23)
 // Floor of the flow law's regime border in units of the tailwater depth (see forward()).
 constexpr double zero_head_border_ratio = 1.05;
 constexpr double submergence_weight = 0.32;
@@ -119,11 +120,7 @@ std::string SluiceGateOptions::validate() const {
   return "";
 }
 
-double limit_condition_level(double y_dwe, double x_up) {
-  if (x_up <= 0.0) return std::numeric_limits<double>::infinity();
-  if (y_dwe <= 0.0) return 0.0;
-  return border_coefficient * y_dwe * std::pow(y_dwe / x_up, border_exponent);
-}
+double limit_condition_level(double y_dwe, double x_up) { return laws::free_flow_limit_level(y_dwe, x_up); }
 
 GateRegime classify_regime(double y_up, double y_dwe, double x_up) {
   const double high = std::max(y_up, y_dwe);

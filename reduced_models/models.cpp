@@ -1,5 +1,7 @@
 #include "reduced_models/models.hpp"
 
+#include "core/laws.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -149,10 +151,7 @@ std::string validate(const Model& model) {
   return model.actuation.validate();
 }
 
-double free_flow_limit_mm(double y_dwe_mm, double x_up_mm) {
-  if (x_up_mm <= 0.0) return INFINITY;  // closed gate: never free flow
-  return 0.81 * y_dwe_mm * std::pow(std::max(y_dwe_mm, 0.0) / x_up_mm, 0.72);
-}
+double free_flow_limit_mm(double y_dwe_mm, double x_up_mm) { return laws::free_flow_limit_level(y_dwe_mm, x_up_mm); }
 
 bool is_free_flow(double y_up_mm, double y_dwe_mm, double x_up_mm) {
   return y_up_mm > free_flow_limit_mm(y_dwe_mm, x_up_mm);
@@ -165,12 +164,12 @@ std::vector<double> rate_limit(const std::vector<double>& u_mm, double h, double
   const double step = speed_mm_s * h;
   x[0] = u_mm[0];
   for (std::size_t k = 1; k < u_mm.size(); ++k) {
-    x[k] = x[k - 1] + std::clamp(u_mm[k] - x[k - 1], -step, step);
+    x[k] = laws::rate_limited_move(x[k - 1], u_mm[k], step);
   }
   return x;
 }
 
-double quantise(double y, double r) { return r > 0.0 ? r * std::nearbyint(y / r) : y; }
+double quantise(double y, double r) { return laws::quantise(y, r); }
 
 void set_head_references(Model& model, const std::vector<const ExperimentData*>& data) {
   if (!uses_upstream_level(model.kind)) return;

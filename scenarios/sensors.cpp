@@ -1,5 +1,7 @@
 #include "scenarios/sensors.hpp"
 
+#include "core/laws.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -54,10 +56,7 @@ std::string SensorOptions::validate() const {
   return "";
 }
 
-double quantise(double value, double resolution) {
-  if (resolution <= 0.0) return value;
-  return resolution * std::round(value / resolution);  // eq. (17), nint = round half away
-}
+double quantise(double value, double resolution) { return laws::quantise(value, resolution); }
 
 Sensor::Sensor(const SensorOptions& options)
     : options_(options), rng_(options.seed), noise_(0.0, options.noise_std > 0.0 ? options.noise_std : 1.0) {
