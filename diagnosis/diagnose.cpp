@@ -977,7 +977,7 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     if (!options.progress) return;
     const std::lock_guard lock(progress_mutex);
     ++done;
-    options.progress(std::min(0.99, static_cast<double>(done) / budget), stage);
+    options.progress({std::min(0.99, static_cast<double>(done) / budget), stage});
   };
   try {
     engine.prepare(recordings);
@@ -1017,7 +1017,7 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     d.message = e.what();
   }
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (options.progress) options.progress(1.0, "done");
+  if (options.progress) options.progress({1.0, "done"});
   return d;
 }
 

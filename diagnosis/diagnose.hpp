@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "diagnosis/catalog.hpp"
 #include "diagnosis/locate.hpp"
 #include "diagnosis/residual_tests.hpp"
@@ -61,8 +62,8 @@ struct DiagnoseOptions {
   double warmup_s = 10.0;        // [0, a third of the shortest recording]
   ResidualTestOptions tests;
   LocateOptions locate;
-  // Called with (fraction done, what is running).
-  std::function<void(double, const std::string&)> progress;
+  ProgressCallback progress;  // share of the simulations done, and the stage
+
   [[nodiscard]] std::string validate() const;
 };
 

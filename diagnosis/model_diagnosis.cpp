@@ -555,7 +555,7 @@ Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDi
   const auto started = std::chrono::steady_clock::now();
   std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
   auto progress = [&](double f, const std::string& what) {
-    if (options.progress) options.progress(f, what);
+    if (options.progress) options.progress({f, what});
   };
   Diagnosis d;
   ModelEngine engine(recordings, options);  // throws InputError naming a recording it cannot use

@@ -376,7 +376,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   // Start from the steady state of the operating point (the command holds its t = 0 value before
   // t = 0): Newton on the discretised equations, or time marching if that fails or is not wanted.
   const auto report = [&](double fraction) {
-    if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
+    if (options.progress) options.progress({std::clamp(fraction, 0.0, 1.0), ""});
   };
   const InitialState initial = settle(b, s, e, options, report);
 
