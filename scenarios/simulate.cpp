@@ -1,5 +1,7 @@
 #include "scenarios/simulate.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,11 +20,6 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-std::string format_number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
 
 solver::SolverOptions solver_options(const NumericsSpec& n) {
   solver::SolverOptions o;
@@ -355,7 +352,7 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
       check(b.canal.advance_to(-marching + marching * k / 20.0), "settling");
       report(result.progress_weight * k / 20.0);
     }
-    const std::string marched = "time marching " + format_number(marching) + " s";
+    const std::string marched = "time marching " + format_g(marching) + " s";
     result.description = solved ? result.description + ", then " + marched
                                 : marched + (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
   }
@@ -469,8 +466,8 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.source = s.name + "/" + e.name;
   rec.set_meta("scenario", s.name);
   rec.set_meta("experiment", e.name);
-  rec.set_meta("operating_opening_mm", format_number(e.operating_opening_mm));
-  rec.set_meta("sampling_period_s", format_number(h));
+  rec.set_meta("operating_opening_mm", format_g(e.operating_opening_mm));
+  rec.set_meta("sampling_period_s", format_g(h));
   rec.set_meta("generator", "canalsim simulate");
   rec.set_meta("initial_state", initial.description);
   rec.set_column(columns::time, t_s);
