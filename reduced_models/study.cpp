@@ -201,7 +201,7 @@ FitOptions fit_options(const StudyOptions& options, const std::string& stage) {
   f.threads = options.threads;
   if (options.progress) {
     auto progress = options.progress;
-    f.progress = [progress, stage](const std::string& line) { progress(stage + ": " + line); };
+    f.progress = [progress, stage](const ProgressReport& r) { progress(stage + ": " + r.message); };
   }
   return f;
 }
