@@ -59,7 +59,7 @@ FitOptions fit_options(const StudyOptions& options, const std::string& stage) {
   f.threads = options.threads;
   if (options.progress) {
     auto progress = options.progress;
-    f.progress = [progress, stage](const std::string& line) { progress({-1.0, stage + ": " + line}); };
+    f.progress = [progress, stage](const ProgressReport& r) { progress({-1.0, stage + ": " + r.message}); };
   }
   return f;
 }
