@@ -14,8 +14,6 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
-#include <mutex>
-#include <thread>
 
 #include "reduced_models/metrics.hpp"
 #include "calibration/replay.hpp"
@@ -89,44 +87,53 @@ struct Costs {
   std::map<std::string, double> mse_fit, mse_heldout;
 };
 
-class Engine {
+// The scenario half of the pipeline (pipeline.hpp): replays the recordings through the scenario,
+// fits each catalog effect by re-simulating (or, for sensor effects, by re-observing the nominal
+// simulation) and judges it on the held-out part of every recording.
+class Engine final : public Explainer {
  public:
-  Engine(const Scenario& base, const DiagnoseOptions& options) : base_(base), o_(options) {}
+  Engine(const Scenario& base, const std::vector<Recording>& recordings, const DiagnoseOptions& options)
+      : base_(base), recordings_(recordings), o_(options) {}
 
-  void prepare(const std::vector<Recording>& recordings);
+  // Explainer:
+  std::vector<RecordingResiduals> nominal_residuals() override;
+  double sensor_resolution() const override { return sensors_.resolution_mm; }
+  EffectResult explain(const std::string& candidate) override;
+  std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override;
+  std::vector<RecordingSeries> series_with(const std::string& effect) const override;
+  void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
+
+ private:
+  void prepare();
   void simulate_nominal();
-  EffectResult evaluate_candidate(Effect effect);
-  Point evaluate(Effect effect, double theta);
+  const std::vector<Channels>& prediction_with(const std::string& effect) const;
   Costs costs(const std::vector<Channels>& prediction) const;
   // Channel-balanced cost: the mean over channels of MSE_c / MSE_c(nominal), each nominal MSE
   // floored at a sensor-noise level, so an effect that explains one channel's residual counts
   // however small that channel's share of the weighted cost (a 0.1 mm lattice error in the
   // levels next to gate-position glitches).
   double balanced(const Costs& c, bool heldout) const;
-
-  const std::vector<Prepared>& recordings() const { return recs_; }
-  const std::vector<Channels>& nominal() const { return nominal_; }
-  const std::map<std::string, double>& scale() const { return scale_; }
-  double period() const { return period_; }
-  double base_resolution() const { return sensors_.resolution_mm; }
-  const Point* best_point(const std::string& name) const {
-    const auto it = best_.find(name);
-    return it == best_.end() ? nullptr : &it->second;
-  }
-  std::function<void(const std::string&)> on_simulation;
-
- private:
   Channels simulate_true(const Scenario& s, const Prepared& p);
   std::vector<Channels> predict(Effect effect, double theta);
+  Point evaluate(Effect effect, double theta);
   std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
-  Point secant_fit(Effect effect, const Point& start, int& sims);
+
+  // The fit of each catalog effect (the effect's parameter θ at its best point).
+  Point fit_sensor_offset();
+  Point fit_sensor_delay();
+  Point fit_sensor_quantization();
+  Point fit_gate_rate_limit(int& sims);
+  Point fit_by_secant(Effect effect, const Point& start, int& sims);
   Point rate_limit_from_position(int& sims);
+  EffectResult unchanged(Effect effect) const;
+  EffectResult judge(Effect effect, Point best, int sims);
+  double parameter_std(Effect effect, const Point& best) const;
   double lattice_resolution() const;
   double reading_spread(double resolution) const;
   double heldout_coherence(double r) const;
-  double correlation_inflation() const { return inflation_; }
 
   const Scenario& base_;
+  const std::vector<Recording>& recordings_;
   const DiagnoseOptions& o_;
   std::vector<Prepared> recs_;
   SensorModel sensors_;
@@ -142,11 +149,14 @@ class Engine {
   std::map<std::string, Point> best_;
 };
 
-void Engine::prepare(const std::vector<Recording>& recordings) {
+void Engine::prepare() {
   sensors_ = sensor_model_of(base_.sensors);
   period_ = base_.sensors.period_s;
   const calibration::ReplayOptions replay = replay_options(o_);
-  for (const Recording& rec : recordings) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
+  for (const Recording& rec : recordings_) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
+  if (!recs_.empty() && !recs_.front().data.count(o_.primary)) {
+    throw InputError(recs_.front().name + ": missing the primary channel " + o_.primary);
+  }
   calibration::ChannelWeights w = calibration::channel_weights(recs_, o_.channels);
   scale_ = std::move(w.scale);
   weight_ = std::move(w.weight);
@@ -154,9 +164,7 @@ void Engine::prepare(const std::vector<Recording>& recordings) {
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
-  Channels out = calibration::replay_true(s, p, replay_options(o_));
-  if (on_simulation) on_simulation(p.name);
-  return out;
+  return calibration::replay_true(s, p, replay_options(o_));
 }
 
 std::vector<double> Engine::fit_residuals(const std::vector<Channels>& prediction) const {
@@ -315,7 +323,7 @@ Point Engine::evaluate(Effect effect, double theta) {
 // Gauss–Newton with a secant Jacobian on the weighted residual vector: each step solves the
 // one-parameter linearisation r(θ) ≈ r_best + J (θ − θ_best) between the best point and its
 // nearest neighbour, within the catalog range.
-Point Engine::secant_fit(Effect effect, const Point& start, int& sims) {
+Point Engine::fit_by_secant(Effect effect, const Point& start, int& sims) {
   const EffectInfo& e = info(effect);
   std::vector<Point> pts;
   pts.push_back(start);
@@ -462,75 +470,122 @@ double Engine::heldout_coherence(double r) const {
   return count > 0.0 ? std::abs(sum) / count : 0.0;
 }
 
-EffectResult Engine::evaluate_candidate(Effect effect) {
-  const EffectInfo& e = info(effect);
-  EffectResult out;
-  out.name = e.name;
-  out.parameter.name = e.parameter;
-  out.parameter.unit = e.unit;
-  const Costs& before = nominal_costs_;
-  out.cost_before = balanced(before, false);
-  out.heldout_cost_before = balanced(before, true);
-  out.nrmse_before = out.nrmse_after = before.nrmse_fit;
-  out.heldout_nrmse_before = out.heldout_nrmse_after = before.nrmse_heldout;
-  out.cost_after = out.cost_before;
-  out.heldout_cost_after = out.heldout_cost_before;
+// Median of the level residuals on the fitted parts: the offset that explains them best in the
+// least-absolute sense (robust to the transients a pure offset does not explain).
+Point Engine::fit_sensor_offset() {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    for (const auto& [c, y] : recs_[i].data) {
+      if (!is_level(c)) continue;
+      for (std::size_t k = 0; k < recs_[i].n_fit; ++k) d.push_back(y[k] - nominal_[i].at(c)[k]);
+    }
+  }
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return evaluate(Effect::sensor_offset, d.empty() ? 0.0 : d[d.size() / 2]);
+}
+
+// A delay re-observes the nominal simulation (no re-simulation): a 0.02 s grid, then the vertex
+// of the parabola through the best grid point and its neighbours.
+Point Engine::fit_sensor_delay() {
+  const EffectInfo& e = info(Effect::sensor_delay);
+  Point best = nominal_point_;
+  best.theta = 0.0;
+  for (double th = 0.02; th <= e.theta_high + 1e-9; th += 0.02) {
+    Point p = evaluate(Effect::sensor_delay, th);
+    if (p.cost < best.cost) best = std::move(p);
+  }
+  if (best.theta > 0.0 && best.theta < e.theta_high) {
+    const double a = evaluate(Effect::sensor_delay, best.theta - 0.02).cost;
+    const double c = evaluate(Effect::sensor_delay, best.theta + 0.02).cost;
+    const double den = a - 2.0 * best.cost + c;
+    if (den > 0.0) {
+      Point p = evaluate(Effect::sensor_delay, best.theta + 0.01 * (a - c) / den);
+      if (p.cost < best.cost) best = std::move(p);
+    }
+  }
+  return best;
+}
+
+Point Engine::fit_sensor_quantization() { return evaluate(Effect::sensor_quantization, lattice_resolution()); }
+
+// From the recorded gate position when every recording has it, else by re-simulation.
+Point Engine::fit_gate_rate_limit(int& sims) {
+  bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
+  for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
+  Point best = have_position ? rate_limit_from_position(sims)
+                             : fit_by_secant(Effect::gate_rate_limit, Point{0.0, nominal_, nominal_point_.r, nominal_point_.cost}, sims);
+  if (std::isnan(best.theta)) best.theta = 0.0;
+  return best;
+}
+
+EffectResult Engine::explain(const std::string& candidate) {
+  const Effect effect = *effect_from_name(candidate);
   if (const std::string why = unsupported_reason(effect, base_); !why.empty()) {
+    EffectResult out = unchanged(effect);
     out.note = why;
     out.parameter.value = no_effect_parameter(effect);
     return out;
   }
   int sims = 0;
-  Point best;
   switch (effect) {
-    case Effect::sensor_offset: {
-      std::vector<double> d;
-      for (std::size_t i = 0; i < recs_.size(); ++i) {
-        for (const auto& [c, y] : recs_[i].data) {
-          if (!is_level(c)) continue;
-          for (std::size_t k = 0; k < recs_[i].n_fit; ++k) d.push_back(y[k] - nominal_[i].at(c)[k]);
-        }
-      }
-      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-      best = evaluate(effect, d.empty() ? 0.0 : d[d.size() / 2]);
-      break;
-    }
-    case Effect::sensor_delay: {
-      best = nominal_point_;
-      best.theta = 0.0;
-      for (double th = 0.02; th <= e.theta_high + 1e-9; th += 0.02) {
-        Point p = evaluate(effect, th);
-        if (p.cost < best.cost) best = std::move(p);
-      }
-      // Parabola through the grid neighbours.
-      if (best.theta > 0.0 && best.theta < e.theta_high) {
-        const double a = evaluate(effect, best.theta - 0.02).cost, c = evaluate(effect, best.theta + 0.02).cost;
-        const double den = a - 2.0 * best.cost + c;
-        if (den > 0.0) {
-          Point p = evaluate(effect, best.theta + 0.01 * (a - c) / den);
-          if (p.cost < best.cost) best = std::move(p);
-        }
-      }
-      break;
-    }
-    case Effect::sensor_quantization: best = evaluate(effect, lattice_resolution()); break;
+    case Effect::sensor_offset: return judge(effect, fit_sensor_offset(), sims);
+    case Effect::sensor_delay: return judge(effect, fit_sensor_delay(), sims);
+    case Effect::sensor_quantization: return judge(effect, fit_sensor_quantization(), sims);
     case Effect::gate_rate_limit: {
-      bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
-      for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
-      best = have_position ? rate_limit_from_position(sims) : secant_fit(effect, Point{0.0, nominal_, nominal_point_.r, nominal_point_.cost}, sims);
-      if (std::isnan(best.theta)) best.theta = 0.0;
-      break;
+      Point best = fit_gate_rate_limit(sims);
+      return judge(effect, std::move(best), sims);
     }
     default: {
       Point start = nominal_point_;
-      start.theta = e.theta_none;
-      best = secant_fit(effect, start, sims);
+      start.theta = info(effect).theta_none;
+      Point best = fit_by_secant(effect, start, sims);
+      return judge(effect, std::move(best), sims);
     }
   }
+}
+
+// Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
+// point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
+// parameter's unit.
+double Engine::parameter_std(Effect effect, const Point& best) const {
+  double jj = 0.0;
+  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? info(effect).theta_none : nominal_point_.theta);
+  if (std::abs(d_theta) > 0.0) {
+    for (std::size_t k = 0; k < best.r.size(); ++k) {
+      const double j = (best.r[k] - nominal_point_.r[k]) / d_theta;
+      jj += j * j;
+    }
+  }
+  if (!(jj > 0.0) || best.r.size() <= 1) return 0.0;
+  const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
+  const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
+  double slope = 1.0;  // d parameter / d θ
+  if (effect == Effect::gate_rate_limit) slope = best.theta > 0.0 ? 1.0 / (best.theta * best.theta) : 0.0;
+  if (effect == Effect::friction) slope = std::exp(best.theta);
+  return theta_sd * slope;
+}
+
+// An effect's result before it is fitted: its names, and the nominal model's figures before and
+// after.
+EffectResult Engine::unchanged(Effect effect) const {
+  const EffectInfo& e = info(effect);
+  EffectResult out;
+  out.name = e.name;
+  out.parameter.name = e.parameter;
+  out.parameter.unit = e.unit;
+  out.cost_before = out.cost_after = balanced(nominal_costs_, false);
+  out.heldout_cost_before = out.heldout_cost_after = balanced(nominal_costs_, true);
+  out.nrmse_before = out.nrmse_after = nominal_costs_.nrmse_fit;
+  out.heldout_nrmse_before = out.heldout_nrmse_after = nominal_costs_.nrmse_heldout;
+  return out;
+}
+
+// Scores an effect at its fitted point: costs before and after, held-out score, BIC, material,
+// uncertainty and significance (pipeline.hpp's rule).
+EffectResult Engine::judge(Effect effect, Point best, int sims) {
+  const EffectInfo& e = info(effect);
+  EffectResult out = unchanged(effect);
   out.simulations = sims;
-  double value = to_parameter(effect, best.theta);
-  if (effect == Effect::sensor_quantization) value = std::max(value, sensors_.resolution_mm);
-  out.parameter.value = value;
   const Costs after = costs(best.prediction);
   out.cost_after = balanced(after, false);
   out.heldout_cost_after = balanced(after, true);
@@ -538,34 +593,19 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   out.heldout_nrmse_after = after.nrmse_heldout;
   out.score = out.heldout_cost_before > 0.0 ? (out.heldout_cost_before - out.heldout_cost_after) / out.heldout_cost_before : 0.0;
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
-  out.delta_bic = n_eff * std::log(std::max(out.cost_after, 1e-300) / std::max(out.cost_before, 1e-300)) + std::log(n_eff);
-  out.material = effect == Effect::sensor_quantization
-                     ? value >= std::max(e.material, 2.0 * sensors_.resolution_mm)
-                     : is_material(effect, value);
-  // Uncertainty: curvature of the cost along θ from a small secant step (cheap effects), or
-  // from the residual sensitivity between the estimate and the nominal (re-simulated ones),
-  // inflated by the residual correlation.
-  double jj = 0.0;
-  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? e.theta_none : nominal_point_.theta);
-  if (std::abs(d_theta) > 0.0) {
-    for (std::size_t k = 0; k < best.r.size(); ++k) {
-      const double j = (best.r[k] - nominal_point_.r[k]) / d_theta;
-      jj += j * j;
-    }
-  }
-  if (jj > 0.0 && best.r.size() > 1) {
-    const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
-    const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
-    double slope = 1.0;
-    if (effect == Effect::gate_rate_limit) slope = best.theta > 0.0 ? 1.0 / (best.theta * best.theta) : 0.0;
-    if (effect == Effect::friction) slope = std::exp(best.theta);
-    out.parameter.std = theta_sd * slope;
-  }
-  out.significant = out.material && out.score >= o_.min_score && -out.delta_bic >= o_.min_bic_gain;
+  out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
+  out.parameter.value = to_parameter(effect, best.theta);
+  out.parameter.std = parameter_std(effect, best);
+  out.material = is_material(effect, out.parameter.value);
+  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, false});
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
-    // the squared-error cost cannot reward this effect. Its evidence is the lattice: the score is
-    // the lattice coherence of the held-out levels at the step fitted on the first part.
+    // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at
+    // least twice the modelled resolution, and the lattice coherence of the held-out levels at
+    // the step fitted on the first part as the score.
+    const double value = std::max(out.parameter.value, sensors_.resolution_mm);
+    out.parameter.value = value;
+    out.material = value >= std::max(e.material, 2.0 * sensors_.resolution_mm);
     out.score = out.material ? heldout_coherence(value) : 0.0;
     out.significant = out.material && out.score >= 0.9;
   }
@@ -573,20 +613,30 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   return out;
 }
 
-std::vector<RecordingResiduals> residual_sets(const std::vector<Prepared>& recs, const std::vector<Channels>& model,
-                                              const std::string& primary, double period) {
+const std::vector<Channels>& Engine::prediction_with(const std::string& effect) const {
+  return effect.empty() ? nominal_ : best_.at(effect).prediction;
+}
+
+std::vector<RecordingResiduals> Engine::nominal_residuals() {
+  prepare();
+  simulate_nominal();
+  return residuals_with("");
+}
+
+std::vector<RecordingResiduals> Engine::residuals_with(const std::string& effect) const {
+  const std::vector<Channels>& model = prediction_with(effect);
   std::vector<RecordingResiduals> out;
-  for (std::size_t i = 0; i < recs.size(); ++i) {
-    const Prepared& p = recs[i];
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const Prepared& p = recs_[i];
     RecordingResiduals r;
     r.name = p.name;
     r.operating_point_mm = p.operating_point_mm;
-    r.period_s = period;
+    r.period_s = period_;
     r.t = p.t;
     r.u = p.u;
-    r.level = p.data.at(primary);
+    r.level = p.data.at(o_.primary);
     r.regime = p.regime;
-    r.primary = primary;
+    r.primary = o_.primary;
     for (const auto& [c, y] : p.data) {
       const auto it = model[i].find(c);
       if (it == model[i].end()) continue;
@@ -594,15 +644,20 @@ std::vector<RecordingResiduals> residual_sets(const std::vector<Prepared>& recs,
       for (std::size_t k = 0; k < p.n; ++k) e[k] = y[k] - it->second[k];
       r.residuals[c] = std::move(e);
     }
-    r.nrmse_percent = reduced::nrmse_percent(model[i].at(primary), p.data.at(primary));
+    r.nrmse_percent = reduced::nrmse_percent(model[i].at(o_.primary), p.data.at(o_.primary));
     out.push_back(std::move(r));
   }
   return out;
 }
 
-std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets, const ResidualTestOptions& o) {
-  std::vector<ResidualTests> out;
-  for (const auto& r : sets) out.push_back(residual_tests(r.residuals.at(r.primary), r.u, o));
+std::vector<RecordingSeries> Engine::series_with(const std::string& effect) const {
+  const std::vector<Channels>& corrected = prediction_with(effect);
+  std::vector<RecordingSeries> out;
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const Prepared& p = recs_[i];
+    out.push_back(RecordingSeries{p.name, p.t, p.u, p.data.at(o_.primary), nominal_[i].at(o_.primary),
+                                  corrected[i].at(o_.primary), p.n_fit});
+  }
   return out;
 }
 
@@ -634,52 +689,6 @@ std::string DiagnoseOptions::validate() const {
   return out.str();
 }
 
-void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d) {
-  double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
-  std::size_t n = 0;
-  for (const auto& r : sets) {
-    const double sigma = noise_level(r.level, resolution);
-    noise_sq += sigma * sigma;
-    const auto& e = r.residuals.at(r.primary);
-    rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
-    n += e.size();
-    const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
-    double v = 0.0;
-    for (double y : r.level) v += (y - mean) * (y - mean);
-    spread_sq += v / static_cast<double>(r.level.size());
-  }
-  const auto count = static_cast<double>(std::max<std::size_t>(sets.size(), 1));
-  d.noise = std::sqrt(noise_sq / count);
-  d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
-  d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
-}
-
-bool set_verdict(Diagnosis& d, double none_noise_factor) {
-  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise ||
-                            std::all_of(d.tests_before.begin(), d.tests_before.end(),
-                                        [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
-  if (!d.effects.empty() && d.effects.front().significant) {
-    const EffectResult& w = d.effects.front();
-    d.verdict = w.name;
-    d.reason = w.name == "sensor_quantization"
-                   ? "the held-out levels lie on a " + format(w.parameter.value) + " mm lattice (coherence " +
-                         format(std::round(100.0 * w.score) / 100.0) + ")"
-                   : w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
-                         w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
-    return true;
-  }
-  if (within_noise) {
-    d.verdict = "none";
-    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
-               format(d.noise) + " mm) and no candidate improves the held-out fit";
-  } else {
-    d.verdict = "unexplained";
-    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " + format(none_noise_factor) +
-               " x the noise (" + format(d.noise) + " mm) and no candidate improves the held-out fit significantly";
-  }
-  return false;
-}
-
 Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
   if (const std::string problem = options.validate(); !problem.empty()) throw InputError("diagnose options: " + problem);
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
@@ -688,66 +697,12 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
     throw InputError(all);
   }
-  const auto started = std::chrono::steady_clock::now();
-  Diagnosis d;
-  std::vector<Effect> candidates;
-  if (options.candidates.empty()) {
-    for (const auto& e : catalog()) candidates.push_back(e.effect);
-  } else {
-    for (const auto& c : options.candidates) candidates.push_back(*effect_from_name(c));
+  std::vector<std::string> candidates = options.candidates;
+  if (candidates.empty()) {
+    for (const auto& e : catalog()) candidates.emplace_back(e.name);
   }
-  Engine engine(scenario, options);
-  // Progress: simulations counted against a rough budget (nominal + ~5 per re-simulated effect).
-  std::size_t done = 0;
-  std::string stage = "nominal";
-  std::mutex progress_mutex;
-  const double budget = static_cast<double>(recordings.size()) * (1.0 + 5.0 * static_cast<double>(candidates.size()));
-  engine.on_simulation = [&](const std::string&) {
-    if (!options.progress) return;
-    const std::lock_guard lock(progress_mutex);
-    ++done;
-    options.progress({std::min(0.99, static_cast<double>(done) / budget), stage});
-  };
-  try {
-    engine.prepare(recordings);
-    if (!engine.recordings().empty() && !engine.recordings().front().data.count(options.primary)) {
-      throw InputError(engine.recordings().front().name + ": missing the primary channel " + options.primary);
-    }
-    engine.simulate_nominal();
-    const auto before_sets = residual_sets(engine.recordings(), engine.nominal(), options.primary, engine.period());
-    d.mismatch = locate(before_sets, options.locate);
-    d.tests_before = tests_of(before_sets, options.tests);
-    d.channel_scale = engine.scale();
-    set_noise_figures(before_sets, engine.base_resolution(), d);
-
-    for (Effect effect : candidates) {
-      stage = info(effect).name;
-      d.effects.push_back(engine.evaluate_candidate(effect));
-    }
-    std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-      if (a.significant != b.significant) return a.significant;
-      return a.score > b.score;
-    });
-    std::vector<Channels> corrected = engine.nominal();
-    if (set_verdict(d, options.none_noise_factor)) corrected = engine.best_point(d.verdict)->prediction;
-    const auto after_sets = residual_sets(engine.recordings(), corrected, options.primary, engine.period());
-    d.mismatch_after = locate(after_sets, options.locate);
-    d.tests_after = tests_of(after_sets, options.tests);
-    for (std::size_t i = 0; i < engine.recordings().size(); ++i) {
-      const Prepared& p = engine.recordings()[i];
-      d.series.push_back(RecordingSeries{p.name, p.t, p.u, p.data.at(options.primary),
-                                         engine.nominal()[i].at(options.primary), corrected[i].at(options.primary),
-                                         p.n_fit});
-    }
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    d.ok = false;
-    d.message = e.what();
-  }
-  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (options.progress) options.progress({1.0, "done"});
-  return d;
+  Engine engine(scenario, recordings, options);
+  return run_pipeline(engine, candidates, {options.none_noise_factor, options.tests, options.locate, options.progress});
 }
 
 }  // namespace canalsim::diagnosis
