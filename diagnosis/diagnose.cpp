@@ -351,34 +351,32 @@ std::vector<RecordingSeries> Engine::series_with(const std::string& effect) cons
 }  // namespace scenario_engine
 
 
-std::string DiagnoseOptions::validate() const {
-  std::ostringstream out;
-  if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected (0.1, 0.9)";
-  else if (primary.empty()) out << "primary: expected a channel name";
-  else if (std::find(channels.begin(), channels.end(), primary) == channels.end()) out << "channels: must include the primary channel " << primary;
-  else if (!(min_score > 0.0 && min_score < 1.0)) out << "min_score = " << min_score << ": expected (0, 1)";
-  else if (!(min_bic_gain >= 0.0)) out << "min_bic_gain = " << min_bic_gain << ": expected >= 0";
-  else if (!(none_noise_factor > 0.0)) out << "none_noise_factor = " << none_noise_factor << ": expected > 0";
-  else if (max_evaluations < 2 || max_evaluations > 50) out << "max_evaluations = " << max_evaluations << ": expected 2..50";
-  else if (threads < 1) out << "threads = " << threads << ": expected >= 1";
-  else if (!(command_lead_samples >= 0.0 && command_lead_samples <= 1.0)) out << "command_lead_samples = " << command_lead_samples << ": expected [0, 1]";
-  else if (!(settle_time_s >= 0.0)) out << "settle_time_s = " << settle_time_s << ": expected >= 0";
-  else if (!(warmup_s >= 0.0)) out << "warmup_s = " << warmup_s << ": expected >= 0";
-  else if (const std::string t = tests.validate(); !t.empty()) out << "tests." << t;
-  else if (const std::string l = locate.validate(); !l.empty()) out << "locate." << l;
-  else {
-    for (const auto& c : candidates) {
-      if (!effect_from_name(c)) {
-        out << "candidates: unknown effect '" << c << "' (expected one of " << catalog_names() << ")";
-        break;
-      }
-    }
+Status DiagnoseOptions::validate() const {
+  Validator check;
+  check.require(fit_fraction > 0.1 && fit_fraction < 0.9, "fit_fraction", fit_fraction, "(0.1, 0.9)");
+  check.require(!primary.empty(), "primary", "expected a channel name");
+  check.require(primary.empty() || std::find(channels.begin(), channels.end(), primary) != channels.end(),
+                "channels", "must include the primary channel " + primary);
+  check.require(min_score > 0.0 && min_score < 1.0, "min_score", min_score, "(0, 1)");
+  check.require(min_bic_gain >= 0.0, "min_bic_gain", min_bic_gain, ">= 0");
+  check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
+  check.require(max_evaluations >= 2 && max_evaluations <= 50, "max_evaluations", max_evaluations, "2..50");
+  check.require(threads >= 1, "threads", threads, ">= 1");
+  check.require(command_lead_samples >= 0.0 && command_lead_samples <= 1.0, "command_lead_samples",
+                command_lead_samples, "[0, 1]");
+  check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");
+  check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.nested("tests", tests.validate());
+  check.nested("locate", locate.validate());
+  for (const auto& c : candidates) {
+    check.require(effect_from_name(c).has_value(), "candidates",
+                  "unknown effect '" + c + "' (expected one of " + catalog_names() + ")");
   }
-  return out.str();
+  return check.status();
 }
 
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
-  if (const std::string problem = options.validate(); !problem.empty()) throw InputError("diagnose options: " + problem);
+  if (const Status status = options.validate(); !status) throw InputError("diagnose options: " + status.message());
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
   if (!problems.empty()) {
     std::string all;

@@ -66,7 +66,7 @@ struct DiagnoseOptions {
   LocateOptions locate;
   ProgressCallback progress;  // share of the simulations done, and the stage
 
-  [[nodiscard]] std::string validate() const;
+  Status validate() const;
 };
 
 // Re-exported from the replay machinery (calibration/replay.hpp): the reconstructed switching

@@ -528,29 +528,25 @@ std::vector<std::string> model_effect_names() {
   return names;
 }
 
-std::string ModelDiagnoseOptions::validate() const {
-  std::ostringstream out;
-  if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected in (0.1, 0.9)";
-  else if (!(min_score > 0.0 && min_score < 1.0)) out << "min_score = " << min_score << ": expected in (0, 1)";
-  else if (!(min_bic_gain >= 0.0)) out << "min_bic_gain = " << min_bic_gain << ": expected >= 0";
-  else if (!(none_noise_factor > 0.0)) out << "none_noise_factor = " << none_noise_factor << ": expected > 0";
-  else if (!(warmup_s >= 0.0)) out << "warmup_s = " << warmup_s << ": expected >= 0";
-  else if (!(quantum_mm >= 0.0)) out << "quantum_mm = " << quantum_mm << ": expected >= 0";
-  else if (!(gate_speed_mm_s >= 0.0)) out << "gate_speed_mm_s = " << gate_speed_mm_s << ": expected >= 0";
-  else if (const auto why = tests.validate(); !why.empty()) out << "tests." << why;
-  else if (const auto why2 = locate.validate(); !why2.empty()) out << "locate." << why2;
-  else {
-    const auto known = model_effect_names();
-    for (const auto& c : candidates) {
-      if (std::find(known.begin(), known.end(), c) == known.end()) {
-        std::string names;
-        for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
-        out << "candidates: unknown effect '" << c << "' (expected one of " << names << ")";
-        break;
-      }
-    }
+Status ModelDiagnoseOptions::validate() const {
+  Validator check;
+  check.require(fit_fraction > 0.1 && fit_fraction < 0.9, "fit_fraction", fit_fraction, "in (0.1, 0.9)");
+  check.require(min_score > 0.0 && min_score < 1.0, "min_score", min_score, "in (0, 1)");
+  check.require(min_bic_gain >= 0.0, "min_bic_gain", min_bic_gain, ">= 0");
+  check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
+  check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.require(quantum_mm >= 0.0, "quantum_mm", quantum_mm, ">= 0");
+  check.require(gate_speed_mm_s >= 0.0, "gate_speed_mm_s", gate_speed_mm_s, ">= 0");
+  check.nested("tests", tests.validate());
+  check.nested("locate", locate.validate());
+  const auto known = model_effect_names();
+  std::string names;
+  for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
+  for (const auto& c : candidates) {
+    check.require(std::find(known.begin(), known.end(), c) != known.end(), "candidates",
+                  "unknown effect '" + c + "' (expected one of " + names + ")");
   }
-  return out.str();
+  return check.status();
 }
 
 ModeResponse damped_mode_response(const std::vector<double>& x, double h, double frequency_hz, double damping) {
@@ -577,7 +573,7 @@ ModeResponse damped_mode_response(const std::vector<double>& x, double h, double
 }
 
 Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& options) {
-  if (const auto why = options.validate(); !why.empty()) throw InputError("diagnose --model: " + why);
+  if (const Status status = options.validate(); !status) throw InputError("diagnose --model: " + status.message());
   if (recordings.empty()) throw InputError("diagnose --model: no recordings");
   const std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
   ModelExplainer explainer(recordings, options);  // throws InputError naming a recording it cannot use
