@@ -10,6 +10,7 @@
 
 #include "core/errors.hpp"
 #include "core/format.hpp"
+#include "linearize/klu_complex.hpp"
 #include "linearize/linearize.hpp"
 
 namespace canalsim::linearize {
@@ -98,34 +99,70 @@ std::vector<double> log_grid(const FrequencyGrid& g) {
 }
 
 std::vector<Complex> frequency_response(const StateSpace& sys, const std::vector<double>& omega) {
-  // M(ω) = iω I − A on A's pattern (which holds every diagonal entry): the pattern is analysed
-  // once (COLAMD), each frequency refactorises and solves M x = B; G = C x + D, times the
-  // sensors' delay e^{−iωτ}.
-  Eigen::SparseMatrix<Complex> m = (-sys.A).cast<Complex>();
-  m.makeCompressed();
-  std::vector<Complex*> diagonal(static_cast<std::size_t>(m.rows()));
-  std::vector<Complex> minus_a_diagonal(diagonal.size());
-  for (int j = 0; j < m.outerSize(); ++j) {
-    for (Eigen::SparseMatrix<Complex>::InnerIterator it(m, j); it; ++it) {
-      if (it.row() == j) diagonal[static_cast<std::size_t>(j)] = &it.valueRef();
+  // M(ω) = iω I − A on A's pattern (which holds every diagonal entry, linearize.cpp): the
+  // pattern is analysed once, each frequency refactorises (KLU, complex) and solves M x = B;
+  // G = C x + D, times the sensors' delay e^{−iωτ}.
+  const auto& a = sys.A;  // compressed, column major
+  const int size = static_cast<int>(a.rows());
+  std::vector<int> column_start(a.outerIndexPtr(), a.outerIndexPtr() + size + 1);
+  std::vector<int> row(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+  std::vector<Complex> values(static_cast<std::size_t>(a.nonZeros()));
+  std::vector<std::size_t> diagonal;
+  for (int j = 0; j < size; ++j) {
+    for (int k = column_start[static_cast<std::size_t>(j)]; k < column_start[static_cast<std::size_t>(j) + 1]; ++k) {
+      values[static_cast<std::size_t>(k)] = -a.valuePtr()[k];
+      if (row[static_cast<std::size_t>(k)] == j) diagonal.push_back(static_cast<std::size_t>(k));
     }
   }
-  for (std::size_t k = 0; k < diagonal.size(); ++k) minus_a_diagonal[k] = *diagonal[k];
-  Eigen::SparseLU<Eigen::SparseMatrix<Complex>, Eigen::COLAMDOrdering<int>> lu;
-  lu.analyzePattern(m);
-  const Eigen::VectorXcd b = sys.B.cast<Complex>();
-  const Eigen::RowVectorXcd c = sys.C.cast<Complex>();
-  std::vector<Complex> g;
+  const std::vector<Complex> minus_a = values;
+  KluComplexSolver solver(size, std::move(column_start), std::move(row));
+  std::vector<Complex> g, x(static_cast<std::size_t>(size)), b(x.size());
+  for (int k = 0; k < size; ++k) b[static_cast<std::size_t>(k)] = sys.B(k);
+  const double b_norm = sys.B.lpNorm<Eigen::Infinity>();
+  // ‖M x − b‖∞ relative to ‖M‖∞‖x‖∞ + ‖b‖∞ (a backward error).
+  auto backward_error = [&] {
+    std::vector<Complex> r(b);
+    double m_norm = 0.0, x_norm = 0.0;
+    std::vector<double> row_sum(x.size(), 0.0);
+    for (int j = 0; j < size; ++j) {
+      x_norm = std::max(x_norm, std::abs(x[static_cast<std::size_t>(j)]));
+      for (int k = a.outerIndexPtr()[j]; k < a.outerIndexPtr()[j + 1]; ++k) {
+        const auto i = static_cast<std::size_t>(a.innerIndexPtr()[k]);
+        r[i] -= values[static_cast<std::size_t>(k)] * x[static_cast<std::size_t>(j)];
+        row_sum[i] += std::abs(values[static_cast<std::size_t>(k)]);
+      }
+    }
+    double r_norm = 0.0;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      r_norm = std::max(r_norm, std::abs(r[i]));
+      m_norm = std::max(m_norm, row_sum[i]);
+    }
+    return r_norm / (m_norm * x_norm + b_norm + 1e-300);
+  };
   g.reserve(omega.size());
   for (double w : omega) {
-    for (std::size_t k = 0; k < diagonal.size(); ++k) *diagonal[k] = minus_a_diagonal[k] + Complex(0.0, w);
-    lu.factorize(m);
-    if (lu.info() != Eigen::Success) {
-      g.emplace_back(INFINITY, 0.0);  // ω is an eigenvalue of A (an undamped mode)
-      continue;
+    for (std::size_t k : diagonal) values[k] = minus_a[k] + Complex(0.0, w);
+    // The last frequency's pivots first (no allocation, no search); fresh pivots when they do
+    // not give a backward-stable solution.
+    bool solved = false;
+    if (solver.refactorize(values)) {
+      x = b;
+      solver.solve(x);
+      solved = backward_error() < 1e-12;
     }
-    const Eigen::VectorXcd x = lu.solve(b);
-    g.push_back(((c * x)(0) + sys.D) * std::exp(Complex(0.0, -w * sys.output_delay_s)));
+    if (!solved) {
+      if (!solver.factorize(values)) {
+        g.emplace_back(INFINITY, 0.0);  // iω is an eigenvalue of A (an undamped mode)
+        continue;
+      }
+      x = b;
+      solver.solve(x);
+    }
+    Complex y = sys.D;
+    for (int k = 0; k < size; ++k) {
+      if (sys.C(k) != 0.0) y += sys.C(k) * x[static_cast<std::size_t>(k)];
+    }
+    g.push_back(y * std::exp(Complex(0.0, -w * sys.output_delay_s)));
   }
   return g;
 }
