@@ -69,6 +69,13 @@ std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArgu
   j["delay_s"] = r.delay_s;
   j["sensor_delay_s"] = r.system.output_delay_s;
   for (const auto& p : r.poles) j["poles"].push_back({{"real", p.real()}, {"imag", p.imag()}});
+  if (r.band_fit) {
+    const auto& f = *r.band_fit;
+    j["prbs_band"] = {{"low_rad_s", r.band->low}, {"high_rad_s", r.band->high}, {"points", f.points},
+                      {"lfom", {{"K", f.gain}, {"T", f.time}, {"lambda", f.order}, {"L_s", f.delay},
+                                {"rms_relative_error", f.rms_relative_error}}},
+                      {"liom_rms_relative_error", f.integer_rms_relative_error}};
+  }
   const auto phase = unwrapped_phase(r.response);
   for (std::size_t k = 0; k < r.omega.size(); ++k) {
     j["response"].push_back({{"omega_rad_s", r.omega[k]}, {"gain", number(std::abs(r.response[k]))},
@@ -85,6 +92,14 @@ void print_summary(const linearize::FrequencyResponse& r, const LinearizeArgumen
   std::cout << "  static gain     " << format_g(r.static_gain) << "\n";
   std::cout << "  delay (phase)   " << format_g(r.delay_s) << " s\n";
   std::cout << "  Nyquist         " << format_g(r.system.nyquist) << " rad/s\n";
+  if (r.band_fit) {
+    const auto& f = *r.band_fit;
+    std::cout << "  PRBS band       " << format_g(r.band->low, 3) << " to " << format_g(r.band->high, 3)
+              << " rad/s: LFOM K e^(-Ls)/(T s^lambda + 1) fitted to G: K = " << format_g(f.gain, 4)
+              << ", T = " << format_g(f.time, 4) << ", lambda = " << format_fixed(f.order, 3) << ", L = "
+              << format_g(f.delay, 4) << " s, rms relative error " << format_fixed(100.0 * f.rms_relative_error, 2)
+              << " % (lambda = 1: " << format_fixed(100.0 * f.integer_rms_relative_error, 2) << " %)\n";
+  }
   std::cout << "  poles nearest the imaginary axis [1/s]:";
   for (const auto& p : r.poles) std::cout << "  " << format_g(p.real(), 4) << (p.imag() >= 0 ? "+" : "") << format_g(p.imag(), 4) << "i";
   std::cout << "\n  omega [rad/s]      gain    phase [deg]\n";

@@ -18,12 +18,14 @@
 #pragma once
 
 #include <complex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
+#include "linearize/fractional_fit.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::linearize {
@@ -88,6 +90,10 @@ struct FrequencyResponse {
   std::vector<std::complex<double>> poles;         // nearest the imaginary axis first [1/s]
   double delay_s = 0.0;                            // from the phase (delay_from_phase)
   std::string steady_state;                        // how the operating point was found
+  // For an experiment driven by a PRBS: its band (prbs_band) and the LFOM fitted to G there
+  // (fit_fractional_order, on 60 log-spaced frequencies of the band below the Nyquist frequency).
+  std::optional<Band> band;
+  std::optional<FractionalFit> band_fit;
 };
 
 // Builds the state-space model of `experiment`'s operating point (its input held at the

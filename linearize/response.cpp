@@ -247,6 +247,15 @@ FrequencyResponse linearize(const scenarios::Scenario& s, const scenarios::Exper
   r.static_gain = static_gain(r.system);
   r.poles = dominant_poles(r.system, options.poles);
   r.delay_s = delay_from_phase(r.omega, r.response);
+  if (e.input.kind == scenarios::InputKind::prbs) {
+    Band band = prbs_band(e.input.prbs_stages, e.input.prbs_clock_s);
+    band.high = std::min(band.high, nyquist);
+    if (band.high > band.low) {
+      const std::vector<double> omega = log_grid({band.low, band.high, 60});
+      r.band = band;
+      r.band_fit = fit_fractional_order(omega, frequency_response(r.system, omega), band, r.delay_s);
+    }
+  }
   r.input_name = to_string(options.input);
   r.output_name = to_string(options.output);
   r.input_unit = options.input.kind == InputKind::gate ? "m" : "m3/s";

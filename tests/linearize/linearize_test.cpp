@@ -224,3 +224,33 @@ TEST(Choices, BadInputsNameTheFlagAndWhatIsAllowed) {
 
 }  // namespace
 }  // namespace canalsim::linearize
+
+namespace canalsim::linearize {
+namespace {
+
+// The band fit recovers a known fractional model (G = K e^{−iωL}/(T (iω)^λ + 1)) exactly.
+TEST(FractionalFit, RecoversAKnownFractionalModel) {
+  const Band band = prbs_band(9, 0.5);
+  EXPECT_NEAR(band.low, 2.0 * M_PI / 255.5, 1e-12);
+  EXPECT_NEAR(band.high, 2.0 * M_PI * 0.443 / 0.5, 1e-12);
+  const std::vector<double> omega = log_grid({band.low, band.high, 60});
+  for (const double lambda : {0.45, 0.8, 1.0}) {
+    std::vector<std::complex<double>> g;
+    for (double w : omega) {
+      const auto s_lambda = std::pow(w, lambda) * std::exp(std::complex<double>(0.0, lambda * M_PI / 2.0));
+      g.push_back(0.5 * std::exp(std::complex<double>(0.0, -w * 4.0)) / (2.0 * s_lambda + 1.0));
+    }
+    const FractionalFit f = fit_fractional_order(omega, g, band, 4.5);
+    EXPECT_NEAR(f.order, lambda, 1e-3);
+    EXPECT_NEAR(f.gain, 0.5, 1e-3);
+    EXPECT_NEAR(f.time, 2.0, 1e-2);
+    EXPECT_NEAR(f.delay, 4.0, 1e-3);
+    EXPECT_LT(f.rms_relative_error, 1e-4);
+    if (lambda < 0.9) {
+      EXPECT_GT(f.integer_rms_relative_error, 10.0 * f.rms_relative_error + 1e-3);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace canalsim::linearize
