@@ -91,7 +91,7 @@ struct FrequencyResponse {
   double delay_s = 0.0;                            // from the phase (delay_from_phase)
   std::string steady_state;                        // how the operating point was found
   // For an experiment driven by a PRBS: its band (prbs_band) and the LFOM fitted to G there
-  // (fit_fractional_order, on 60 log-spaced frequencies of the band below the Nyquist frequency).
+  // (fit_fractional_order, on 200 log-spaced frequencies of the band below the Nyquist frequency).
   std::optional<Band> band;
   std::optional<FractionalFit> band_fit;
 };

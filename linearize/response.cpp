@@ -251,9 +251,12 @@ FrequencyResponse linearize(const scenarios::Scenario& s, const scenarios::Exper
     Band band = prbs_band(e.input.prbs_stages, e.input.prbs_clock_s);
     band.high = std::min(band.high, nyquist);
     if (band.high > band.low) {
-      const std::vector<double> omega = log_grid({band.low, band.high, 60});
+      // A grid of its own (the fit must not depend on the user's), fine enough to unwrap the
+      // phase of the delay for the fit's delay hint.
+      const std::vector<double> omega = log_grid({band.low, band.high, 200});
+      const auto g = frequency_response(r.system, omega);
       r.band = band;
-      r.band_fit = fit_fractional_order(omega, frequency_response(r.system, omega), band, r.delay_s);
+      r.band_fit = fit_fractional_order(omega, g, band, delay_from_phase(omega, g));
     }
   }
   r.input_name = to_string(options.input);
