@@ -1,5 +1,7 @@
 #include "diagnosis/blindtest.hpp"
 
+#include "core/parallel.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -9,8 +11,8 @@
 #include <mutex>
 #include <numeric>
 #include <sstream>
-#include <thread>
 
+#include "core/parallel.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::diagnosis {
@@ -129,59 +131,54 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   }
   BlindtestResult result;
   result.trials.resize(truths.size());
-  std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
   std::mutex progress_mutex;
   DiagnoseOptions diagnose_options = o.diagnose;
   diagnose_options.threads = 1;
   diagnose_options.progress = nullptr;
-  auto worker = [&] {
-    for (std::size_t i = next++; i < truths.size(); i = next++) {
-      Trial& trial = result.trials[i];
-      trial.index = static_cast<int>(i);
-      trial.truth = truths[i];
-      const auto t0 = std::chrono::steady_clock::now();
-      try {
-        std::vector<Recording> recordings;
-        for (std::size_t k = 0; k < experiments.size(); ++k) {
-          scenarios::Scenario s = base;
-          scenarios::ExperimentSpec e = experiments[k];
-          scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
-          sensors.noise_std_mm = o.noise_std_mm;
-          sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
-          e.sensors = sensors;
-          conceal(trial.truth, s, e, inflow[k]);
-          Recording r = scenarios::simulate(s, e);
-          r.source = "trial" + std::to_string(i) + "/" + e.name;
-          recordings.push_back(std::move(r));
-        }
-        const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
-        if (!d.ok) throw std::runtime_error(d.message);
-        trial.verdict = d.verdict;
-        trial.correct = trial.verdict == trial.truth.effect;
-        trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
-        for (const auto& e : d.effects) {
-          if (e.name == trial.truth.effect) {
-            trial.estimate = e.parameter.value;
-            trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
-          }
-          if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
-        }
-      } catch (const std::exception& ex) {
-        trial.verdict = "failed";
-        trial.message = ex.what();
+  // Each trial catches its own failure (verdict "failed"), so one bad trial does not end the test.
+  parallel_for(truths.size(), o.threads, [&](std::size_t i) {
+    Trial& trial = result.trials[i];
+    trial.index = static_cast<int>(i);
+    trial.truth = truths[i];
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      std::vector<Recording> recordings;
+      for (std::size_t k = 0; k < experiments.size(); ++k) {
+        scenarios::Scenario s = base;
+        scenarios::ExperimentSpec e = experiments[k];
+        scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+        sensors.noise_std_mm = o.noise_std_mm;
+        sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
+        e.sensors = sensors;
+        conceal(trial.truth, s, e, inflow[k]);
+        Recording r = scenarios::simulate(s, e);
+        r.source = "trial" + std::to_string(i) + "/" + e.name;
+        recordings.push_back(std::move(r));
       }
-      trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      const int finished = ++done;
-      if (o.progress) {
-        const std::lock_guard lock(progress_mutex);
-        o.progress(finished, o.trials);
+      const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
+      if (!d.ok) throw std::runtime_error(d.message);
+      trial.verdict = d.verdict;
+      trial.correct = trial.verdict == trial.truth.effect;
+      trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
+      for (const auto& e : d.effects) {
+        if (e.name == trial.truth.effect) {
+          trial.estimate = e.parameter.value;
+          trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
+        }
+        if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
       }
+    } catch (const std::exception& ex) {
+      trial.verdict = "failed";
+      trial.message = ex.what();
     }
-  };
-  std::vector<std::thread> pool;
-  for (int w = 0; w < std::min(o.threads, o.trials); ++w) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+    trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const int finished = ++done;
+    if (o.progress) {
+      const std::lock_guard lock(progress_mutex);
+      o.progress({static_cast<double>(finished) / o.trials, std::to_string(finished) + "/" + std::to_string(o.trials) + " trials"});
+    }
+  });
 
   // Summary.
   result.classes = classes;

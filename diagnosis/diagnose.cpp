@@ -18,18 +18,18 @@
 #include <thread>
 
 #include "reduced_models/metrics.hpp"
-#include "scenarios/simulate.hpp"
+#include "calibration/replay.hpp"
+#include "core/parallel.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
 
-using Channels = std::map<std::string, std::vector<double>>;
 using scenarios::Scenario;
 
-bool is_level(const std::string& channel) {
-  return channel == columns::upstream_level || channel == columns::level_below_gate ||
-         channel == columns::level_downstream_end;
-}
+using calibration::Channels;
+using calibration::is_level;
+using calibration::observe;
+using Prepared = calibration::Replay;
 
 std::string format(double v) {
   std::ostringstream out;
@@ -37,84 +37,17 @@ std::string format(double v) {
   return out.str();
 }
 
-// One recording made ready for replay.
-struct Prepared {
-  std::string name;
-  Recording drive;            // t_s shifted: first sample at 0, command lead applied
-  std::vector<double> t, u, regime;
-  Channels data;              // the compared channels the recording has (after the warm-up)
-  double operating_point_mm = 0.0;
-  std::size_t skip = 0;       // warm-up samples dropped from every series
-  bool clocked = false;       // the drive switches at reconstructed clock instants
-  std::size_t n = 0, n_fit = 0;
-};
-
-const scenarios::GateSpec* controlled_gate(const Scenario& s) {
-  if (s.head_gate && s.head_gate->controlled) return &*s.head_gate;
-  for (const auto& g : s.gates) {
-    if (g.controlled) return &g;
-  }
-  return nullptr;
-}
-
-// Runs `task(i)` for i in [0, n) on up to `threads` threads; rethrows the first exception.
-template <class Task>
-void parallel_for(std::size_t n, int threads, const Task& task) {
-  const std::size_t workers = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(threads, 1)));
-  if (workers <= 1) {
-    for (std::size_t i = 0; i < n; ++i) task(i);
-    return;
-  }
-  std::vector<std::exception_ptr> errors(n);
-  std::vector<std::thread> pool;
-  for (std::size_t w = 0; w < workers; ++w) {
-    pool.emplace_back([&, w] {
-      for (std::size_t i = w; i < n; i += workers) {
-        try {
-          task(i);
-        } catch (...) {
-          errors[i] = std::current_exception();
-        }
-      }
-    });
-  }
-  for (auto& t : pool) t.join();
-  for (auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-}
-
-// Linear interpolation of a uniformly sampled series at a fractional index (clamped at the ends:
-// before the first sample the experiment was at its steady state).
-double at_fractional(const std::vector<double>& y, double index) {
-  if (index <= 0.0) return y.front();
-  const double last = static_cast<double>(y.size() - 1);
-  if (index >= last) return y.back();
-  const auto k = static_cast<std::size_t>(index);
-  const double f = index - static_cast<double>(k);
-  return y[k] + f * (y[k + 1] - y[k]);
-}
-
-double quantise_mm(double v, double r) { return laws::quantise(v, r); }
-
-// The level sensors of `m` applied to sampled true levels (paper eq. 17 last).
-Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
-  Channels out;
-  const double shift = m.delay_s / period_s;
-  for (const auto& [name, y] : truth) {
-    if (!is_level(name)) {
-      out[name] = y;
-      continue;
-    }
-    std::vector<double> v(y.size());
-    for (std::size_t k = 0; k < y.size(); ++k) {
-      const double level = at_fractional(y, static_cast<double>(k) - shift) + m.offset_mm;
-      v[k] = m.reading_spread_mm > 0.0 ? expected_reading(level, m.resolution_mm, m.reading_spread_mm)
-                                       : quantise_mm(level, m.resolution_mm);
-    }
-    out[name] = std::move(v);
-  }
-  return out;
+// The replay settings of the diagnosis options (calibration/replay.hpp).
+calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
+  calibration::ReplayOptions r;
+  r.channels = o.channels;
+  r.fit_fraction = o.fit_fraction;
+  r.use_recorded_upstream = o.use_recorded_upstream;
+  r.command_lead_samples = o.command_lead_samples;
+  r.reconstruct_clock = o.reconstruct_clock;
+  r.settle_time_s = o.settle_time_s;
+  r.warmup_s = o.warmup_s;
+  return r;
 }
 
 // Gate position under a constant-speed actuator (paper eq. 16) driven by the replayed command
@@ -210,126 +143,18 @@ class Engine {
 };
 
 void Engine::prepare(const std::vector<Recording>& recordings) {
-  const scenarios::SensorSpec& s = base_.sensors;
-  sensors_ = sensor_model_of(s);
-  period_ = s.period_s;
-  for (const Recording& rec : recordings) {
-    Prepared p;
-    p.name = rec.source.empty() ? rec.meta("experiment", "recording") : rec.source;
-    const std::vector<double>& t = rec.column(columns::time);
-    const std::vector<double>& u = rec.column(columns::gate_command);
-    const std::size_t total = t.size();
-    p.skip = std::min(total / 3, static_cast<std::size_t>(std::ceil(o_.warmup_s / period_ - 1e-9)));
-    auto tail = [&](const std::vector<double>& v) { return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(p.skip), v.end()); };
-    p.t = tail(t);
-    for (auto& x : p.t) x -= t.front();
-    p.u = tail(u);
-    p.n = p.t.size();
-    p.n_fit = static_cast<std::size_t>(std::round(o_.fit_fraction * static_cast<double>(p.n)));
-    if (rec.has(columns::regime)) p.regime = tail(rec.column(columns::regime));
-    for (const auto& c : o_.channels) {
-      if (rec.has(c)) p.data[c] = tail(rec.column(c));
-    }
-    // The operating point the experiment started from: metadata when it is a valid opening.
-    double op = u.front();
-    const std::string meta = rec.meta("operating_opening_mm");
-    char* end = nullptr;
-    const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
-    const scenarios::GateSpec* gate = controlled_gate(base_);
-    if (!meta.empty() && end && *end == '\0' && parsed >= 0.0 && gate && parsed <= gate->max_opening_m * 1e3) op = parsed;
-    p.operating_point_mm = op;
-    // Drive: time from 0, the command switched `command_lead_samples` early, and one extra row
-    // holding the operating point before the first sample so that the replay settles there.
-    const double shift = t.front() + o_.command_lead_samples * period_;
-    p.drive = Recording{};
-    p.drive.source = rec.source;
-    p.drive.metadata = rec.metadata;
-    for (std::size_t c = 0; c < rec.names.size(); ++c) {
-      std::vector<double> v = rec.columns[c];
-      const std::string& name = rec.names[c];
-      if (name == columns::time) {
-        for (auto& x : v) x -= shift;
-        v.insert(v.begin(), v.front() - 1e-3 * period_);
-      } else {
-        v.insert(v.begin(), name == columns::gate_command ? op : v.front());
-      }
-      p.drive.names.push_back(name);
-      p.drive.columns.push_back(std::move(v));
-    }
-    const bool upstream_replayed = o_.use_recorded_upstream && rec.has(columns::upstream_level);
-    if (o_.reconstruct_clock && !upstream_replayed) {
-      const std::vector<double> switches = command_switch_times(t, u);
-      if (!switches.empty()) {
-        // A drive of the command alone: the operating point before t = 0, u[0] from t = 0,
-        // then each change at its reconstructed instant.
-        std::vector<double> dt{-1e-3 * period_, 0.0}, du{op, u.front()};
-        std::size_t j = 0;
-        for (std::size_t k = 1; k < total; ++k) {
-          if (u[k] == u[k - 1]) continue;
-          const double at = switches[j++] - t.front();
-          if (at <= dt.back()) continue;
-          dt.push_back(at);
-          du.push_back(u[k]);
-        }
-        p.drive = Recording{};
-        p.drive.source = rec.source;
-        p.drive.metadata = rec.metadata;
-        p.drive.set_meta("operating_opening_mm", format(op));
-        p.drive.names = {columns::time, columns::gate_command};
-        p.drive.columns = {dt, du};
-        p.clocked = true;
-      }
-    }
-    recs_.push_back(std::move(p));
-  }
-  // Channel scales: the mean within-recording spread, floored so that a nearly constant channel
-  // (a PID-held upstream level) does not dominate the cost.
-  for (const auto& c : o_.channels) {
-    double sum = 0.0;
-    int count = 0;
-    for (const auto& p : recs_) {
-      const auto it = p.data.find(c);
-      if (it == p.data.end()) continue;
-      const auto& y = it->second;
-      const double m = std::accumulate(y.begin(), y.end(), 0.0) / static_cast<double>(y.size());
-      double v = 0.0;
-      for (double x : y) v += (x - m) * (x - m);
-      sum += std::sqrt(v / static_cast<double>(y.size()));
-      ++count;
-    }
-    if (count == 0) continue;
-    const double floor = c == columns::discharge ? 0.05 : 0.5;
-    scale_[c] = std::max(sum / count, floor);
-    weight_[c] = 1.0 / (scale_[c] * scale_[c]);
-  }
+  sensors_ = sensor_model_of(base_.sensors);
+  period_ = base_.sensors.period_s;
+  const calibration::ReplayOptions replay = replay_options(o_);
+  for (const Recording& rec : recordings) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
+  calibration::ChannelWeights w = calibration::channel_weights(recs_, o_.channels);
+  scale_ = std::move(w.scale);
+  weight_ = std::move(w.weight);
   for (const auto& p : recs_) fit_samples_ += p.data.size() * p.n_fit;
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
-  scenarios::ExperimentSpec e;
-  e.name = p.name;
-  e.operating_opening_mm = p.operating_point_mm;
-  e.duration_s = (static_cast<double>(p.n + p.skip) - 0.5) * period_;
-  e.input.kind = scenarios::InputKind::constant;
-  scenarios::SensorSpec ideal = s.sensors;
-  ideal.resolution_mm = 0.0;
-  ideal.noise_std_mm = 0.0;
-  ideal.delay_s = 0.0;
-  ideal.offset_mm = 0.0;
-  e.sensors = ideal;
-  scenarios::SimulateOptions so;
-  so.drive.recording = &p.drive;
-  so.drive.use_recorded_upstream = o_.use_recorded_upstream && p.drive.has(columns::upstream_level);
-  so.settle_time = o_.settle_time_s;
-  const Recording r = scenarios::simulate(s, e, so);
-  Channels out;
-  for (const auto& [c, y] : p.data) {
-    if (!r.has(c)) continue;
-    const std::vector<double>& all = r.column(c);
-    std::vector<double> v(all.begin() + static_cast<std::ptrdiff_t>(std::min(p.skip, all.size())), all.end());
-    v.resize(p.n, v.empty() ? 0.0 : v.back());
-    out[c] = std::move(v);
-  }
+  Channels out = calibration::replay_true(s, p, replay_options(o_));
   if (on_simulation) on_simulation(p.name);
   return out;
 }
@@ -783,58 +608,6 @@ std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets,
 
 }  // namespace
 
-std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
-  std::vector<std::size_t> changes;
-  for (std::size_t k = 1; k < u.size(); ++k) {
-    if (u[k] != u[k - 1]) changes.push_back(k);
-  }
-  if (changes.size() < 8 || t.size() < 2) return {};
-  const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
-  double d_min = 1e300;
-  for (std::size_t j = 1; j < changes.size(); ++j) d_min = std::min(d_min, t[changes[j]] - t[changes[j - 1]]);
-  // Every grid point must fall in its change interval (t[k-1], t[k]], widened by a small
-  // tolerance: a switch exactly at a sample instant (0.5 s clock, 0.13 s samples: every 6.5 s)
-  // may show at that sample or the next, depending on rounding in the recorder.
-  const double tol = 0.03 * h;
-  auto feasible = [&](double period, double phase) {
-    for (std::size_t k : changes) {
-      const double m = std::ceil((t[k - 1] - tol - phase) / period);
-      const double s = phase + m * period;
-      if (!(s >= t[k - 1] - tol && s <= t[k] + tol)) return false;
-    }
-    return true;
-  };
-  const std::size_t first = changes.front();
-  std::vector<std::pair<double, double>> found;  // feasible (period, phase)
-  // A period error δ moves the m-th grid point by m δ, so the step must be below the tolerance
-  // divided by the number of periods the changes span (~500 for a 255 s PRBS at 0.5 s).
-  const double span = t[changes.back()] - t[changes.front() - 1];
-  const double period_step = std::max(1e-7, 0.5 * tol * std::max(d_min - h, 0.5 * h) / std::max(span, h));
-  for (double period = std::max(0.5 * h, d_min - h); period <= d_min + h; period += period_step) {
-    for (int i = 0; i <= 80; ++i) {
-      const double phase = t[first - 1] - tol + (h + 2.0 * tol) * i / 80.0;
-      if (feasible(period, phase)) found.emplace_back(period, phase);
-    }
-  }
-  if (found.empty()) return {};
-  // A finer grid can also fit (a few periods shorter than the clock pass by chance); the
-  // longest consistent period is the clock. Its feasible patch is convex: take its centre.
-  const double longest = found.back().first;
-  double sum_period = 0.0, sum_phase = 0.0;
-  int count = 0;
-  for (const auto& [period, phase] : found) {
-    if (longest - period > 1e-3 * longest) continue;
-    sum_period += period;
-    sum_phase += phase;
-    ++count;
-  }
-  const double period = sum_period / count, phase = sum_phase / count;
-  if (!feasible(period, phase)) return {};
-  std::vector<double> out;
-  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
-  return out;
-}
-
 std::string DiagnoseOptions::validate() const {
   std::ostringstream out;
   if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected (0.1, 0.9)";
@@ -859,50 +632,6 @@ std::string DiagnoseOptions::validate() const {
     }
   }
   return out.str();
-}
-
-std::vector<std::string> check_recordings(const Scenario& s, const std::vector<Recording>& recordings) {
-  std::vector<std::string> problems;
-  const scenarios::GateSpec* gate = controlled_gate(s);
-  const double max_mm = gate ? gate->max_opening_m * 1e3 : std::numeric_limits<double>::infinity();
-  const double h = s.sensors.period_s;
-  if (recordings.empty()) problems.push_back("no recordings given");
-  for (const Recording& rec : recordings) {
-    const std::string name = rec.source.empty() ? "recording" : rec.source;
-    std::vector<std::string> missing;
-    for (const char* c : {columns::time, columns::gate_command, columns::level_downstream_end}) {
-      if (!rec.has(c)) missing.push_back(c);
-    }
-    if (!missing.empty()) {
-      std::string list;
-      for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
-      problems.push_back(name + ": missing channel(s) " + list);
-      continue;
-    }
-    if (rec.size() < 50) {
-      problems.push_back(name + ": " + std::to_string(rec.size()) + " samples, expected at least 50");
-      continue;
-    }
-    const double hr = rec.sample_period();
-    if (std::abs(hr - h) > 0.01 * h) {
-      problems.push_back(name + ": sampled every " + format(hr) + " s, but the scenario's sensors sample every " +
-                         format(h) + " s (sensors.period_s)");
-    }
-    for (const char* c : {columns::gate_command, columns::gate_position}) {
-      if (!rec.has(c)) continue;
-      const auto& v = rec.column(c);
-      const auto& t = rec.column(columns::time);
-      for (std::size_t k = 0; k < v.size(); ++k) {
-        if (v[k] < -1e-9 || v[k] > max_mm + 1e-9) {
-          problems.push_back(name + ": " + c + " = " + format(v[k]) + " mm at t = " + format(t[k]) +
-                             " s is outside the controlled gate's range 0.." + format(max_mm) + " mm");
-          break;
-        }
-      }
-    }
-  }
-  if (!gate) problems.push_back(s.source + ": the scenario has no gate with controlled = true to replay the command on");
-  return problems;
 }
 
 void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d) {
@@ -977,7 +706,7 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     if (!options.progress) return;
     const std::lock_guard lock(progress_mutex);
     ++done;
-    options.progress(std::min(0.99, static_cast<double>(done) / budget), stage);
+    options.progress({std::min(0.99, static_cast<double>(done) / budget), stage});
   };
   try {
     engine.prepare(recordings);
@@ -1017,7 +746,7 @@ Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recor
     d.message = e.what();
   }
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (options.progress) options.progress(1.0, "done");
+  if (options.progress) options.progress({1.0, "done"});
   return d;
 }
 

@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
+#include "calibration/replay.hpp"
 #include "diagnosis/catalog.hpp"
 #include "diagnosis/locate.hpp"
 #include "diagnosis/residual_tests.hpp"
@@ -61,8 +63,8 @@ struct DiagnoseOptions {
   double warmup_s = 10.0;        // [0, a third of the shortest recording]
   ResidualTestOptions tests;
   LocateOptions locate;
-  // Called with (fraction done, what is running).
-  std::function<void(double, const std::string&)> progress;
+  ProgressCallback progress;  // share of the simulations done, and the stage
+
   [[nodiscard]] std::string validate() const;
 };
 
@@ -112,16 +114,10 @@ struct Diagnosis {
   double seconds = 0.0;
 };
 
-// The instants at which a sampled, clocked command changed: if one clock (period T, phase t0)
-// puts a grid point inside every interval (t[k-1], t[k]] where u changes, the grid points;
-// otherwise empty. Periods are searched near the shortest spacing between changes.
-std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u);
-
-// Problems that make recordings unusable with the scenario, one line each naming the recording:
-// sampling period different from the scenario's sensors, missing channels, gate commands or
-// positions outside the controlled gate's range, too few samples. Empty when all are usable.
-std::vector<std::string> check_recordings(const scenarios::Scenario& scenario,
-                                          const std::vector<Recording>& recordings);
+// Re-exported from the replay machinery (calibration/replay.hpp): the reconstructed switching
+// instants of a clocked command, and the problems that make recordings unusable with a scenario.
+using calibration::command_switch_times;
+using calibration::check_recordings;
 
 // Noise of the primary channel estimated from the recordings themselves, the nominal residual RMS
 // and the Nrmse a perfect model would reach given that noise (fields of `d`).

@@ -1,5 +1,7 @@
 #include "diagnosis/model_diagnosis.hpp"
 
+#include "core/format.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
@@ -27,11 +29,6 @@ constexpr const char* kUpstream = "upstream_level_variation";
 constexpr const char* kRegime = "flow_regime_switch";
 constexpr const char* kWave = "wave_resonance";
 
-std::string format(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 // Free-flow share of the samples by the paper's condition (8), with the gate position where it
 // was recorded and the command otherwise.
@@ -298,7 +295,7 @@ EffectResult sensor_quantization(const ModelEngine& e) {
   if (r == 0.0) return not_expressible("sensor_quantization", "the recorded levels lie on no lattice");
   if (r <= 1.5 * modelled) {
     return not_expressible("sensor_quantization",
-                           "the recorded lattice (" + format(r) + " mm) is the modelled resolution");
+                           "the recorded lattice (" + format_g(r) + " mm) is the modelled resolution");
   }
   // The corrected prediction is the nominal model's level read by the coarser sensor: its
   // expected reading given the model's own spread (catalog.hpp, expected_reading; docs/diagnosis.md
@@ -354,7 +351,7 @@ EffectResult flow_regime_switch(const ModelEngine& e) {
   const double share = free_share(e.data());
   if (share < 0.05 || share > 0.95) {
     return not_expressible(kRegime, "the recordings stay in one regime (free flow in " +
-                                        format(std::round(100.0 * share)) + "% of the samples)");
+                                        format_g(std::round(100.0 * share)) + "% of the samples)");
   }
   Model m = e.fit_kind(ModelKind::hybrid);
   const int extra = static_cast<int>(reduced::parameter_names(ModelKind::hybrid).size() -
@@ -555,7 +552,7 @@ Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDi
   const auto started = std::chrono::steady_clock::now();
   std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
   auto progress = [&](double f, const std::string& what) {
-    if (options.progress) options.progress(f, what);
+    if (options.progress) options.progress({f, what});
   };
   Diagnosis d;
   ModelEngine engine(recordings, options);  // throws InputError naming a recording it cannot use

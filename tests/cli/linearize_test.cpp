@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 
