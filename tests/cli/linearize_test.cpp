@@ -53,3 +53,29 @@ TEST(Linearize, WritesTheResponseOnTheRequestedGrid) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace canalsim::cli_test;
+namespace fs = std::filesystem;
+
+TEST(FitFreqCheck, ComparesTheFittedModelWithTheLinearisedPool) {
+  const fs::path scratch = scratch_dir("fit_freq_check");
+  ASSERT_EQ(run_canalsim("simulate lab -e op2 -o op2.csv", scratch).code, 0);
+  const RunResult wrong = run_canalsim("fit -m liom op2.csv --freq-check asce2", scratch);
+  EXPECT_TRUE(is_one_error_line(wrong)) << wrong.err;
+  EXPECT_NE(wrong.err.find("--freq-check: op2.csv comes from experiment 'op2', which scenario 'asce2' does not have"),
+            std::string::npos)
+      << wrong.err;
+  const RunResult r = run_canalsim("fit -m liom op2.csv --freq-check lab --json f.json", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("frequency check against the linearised pool"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(read_text(scratch / "f.json"));
+  ASSERT_EQ(j["freq_check"].size(), 1u);
+  const double error = j["freq_check"][0]["model_vs_pde_rms_relative_error"].get<double>();
+  EXPECT_GT(error, 0.0);
+  EXPECT_LT(error, 1.0);  // the fitted LIOM is within the PDE's order of magnitude over the band
+  fs::remove_all(scratch);
+}
+
+}  // namespace
