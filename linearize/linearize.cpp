@@ -195,92 +195,35 @@ double grid_nyquist(const solver::Canal& canal) {
   return M_PI * slowest;
 }
 
-}  // namespace
-
-StateSpace linearize_system(const scenarios::Scenario& s, const scenarios::ExperimentSpec& experiment,
-                            const InputChoice& input_choice, const OutputChoice& output_choice, std::string* note) {
-  // The operating point: the experiment's command held at its operating opening, before events.
-  scenarios::ExperimentSpec e = experiment;
-  e.input.kind = scenarios::InputKind::constant;
-  e.events.clear();
-  BuiltCanal b = scenarios::build_canal(s, e);
-  solver::Canal& canal = b.canal;
-  canal.set_time(0.0);
-  b.controlled->reset(0.0, b.controlled->command(0.0));
-  const scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
-  InputHandle input = find_input(b, s, input_choice);
-  const OutputHandle output = find_output(b, s, sensors, output_choice);
-
-  solver::SteadyStateOptions steady;
-  steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
-  const solver::SteadyStateSummary summary = solver::solve_steady_state(canal, steady);
-  if (!summary.status) {
-    throw InputError(s.source + ": experiment '" + e.name + "': no steady state at the operating point (" +
-                     summary.status.message() + ")");
-  }
-  if (note) *note = "steady state (Newton, " + std::to_string(summary.iterations) + " iterations)";
-  canal.set_time(0.0);
-
-  const int n = canal.total_cells();
-  const int unknowns = 2 * n;
-  std::vector<double> u0(static_cast<std::size_t>(unknowns)), f0;
-  solver::store_state(canal, u0.data());
+// The canal at its operating point and the pieces of the state-space model as they are built.
+struct Assembly {
+  BuiltCanal& built;
+  const OutputHandle& output;
   ReservoirRows reservoir;
-  if (b.reservoir) {
-    gates::Reservoir& tank = b.reservoir->reservoir();
-    const double q = canal.reach(0).discharge().front();
-    tank.start_at_steady_state(q);
-    reservoir.o = &tank.options();
-    const double f = q / tank.options().flow_per_hz;
-    reservoir.saturated = !(f > tank.options().min_frequency && f < tank.options().max_frequency);
-  }
-  const int size = unknowns + reservoir.states();
-  const double t = canal.time();
-  const auto kinks = solver::LimiterKinks::centred;
-  canal.evaluate_rates(t, f0, kinks);
+  int unknowns = 0;                   // canal unknowns (2 per cell)
+  std::vector<double> u0, u, scale;   // steady state, work copy, typical sizes
+  std::vector<Eigen::Triplet<double>> triplets;  // of A
+  StateSpace sys;
 
-  // A_UU: the scheme's band by coloured forward differences.
-  std::vector<double> scale(static_cast<std::size_t>(unknowns));
-  double a_scale = 1e-12, q_scale = 1e-9;
-  for (int k = 0; k < unknowns; k += 2) {
-    a_scale = std::max(a_scale, std::abs(u0[static_cast<std::size_t>(k)]));
-    q_scale = std::max(q_scale, std::abs(u0[static_cast<std::size_t>(k + 1)]));
-  }
-  for (int k = 0; k < unknowns; k += 2) {
-    scale[static_cast<std::size_t>(k)] = a_scale;
-    scale[static_cast<std::size_t>(k + 1)] = std::max(q_scale, 1e-3 * a_scale);
-  }
-  const solver::RatesPattern pattern = solver::rates_jacobian_pattern(n);
-  std::vector<double> values(pattern.row.size());
-  int evaluations = 0;
-  std::vector<double> u = u0;
-  if (!solver::rates_jacobian(canal, t, u.data(), f0.data(), scale, pattern, {kJacobianStep, kinks}, values.data(),
-                              &evaluations)) {
-    throw InputError(s.source + ": experiment '" + e.name +
-                     "': the scheme cannot be evaluated next to the steady state (dry or non-finite cells)");
-  }
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(values.size() + 64);
-  for (int j = 0; j < unknowns; ++j) {
-    for (auto k = pattern.column_start[static_cast<std::size_t>(j)]; k < pattern.column_start[static_cast<std::size_t>(j) + 1]; ++k) {
-      triplets.emplace_back(static_cast<int>(pattern.row[static_cast<std::size_t>(k)]), j, values[static_cast<std::size_t>(k)]);
-    }
-  }
+  static constexpr auto kKinks = solver::LimiterKinks::centred;
 
-  // Probed columns: central differences of (rates, head-gate discharge, output).
+  solver::Canal& canal() { return built.canal; }
+  double time() { return built.canal.time(); }
+
+  // What a probe reads: the rates, the head gate's discharge, the output.
   struct Probe {
     std::vector<double> rates;
     double gate_q = 0.0, out = 0.0;
   };
-  auto evaluate = [&] {
+  Probe evaluate() {
     Probe p;
-    canal.evaluate_rates(t, p.rates, kinks);
-    p.gate_q = canal.end_face_discharge(0, End::upstream);
+    canal().evaluate_rates(time(), p.rates, kKinks);
+    p.gate_q = canal().end_face_discharge(0, End::upstream);
     p.out = output.value();
     return p;
-  };
-  // Derivatives by a central difference of `set` (called with +h, −h, then 0 to restore).
-  auto probe = [&](const std::function<void(double)>& set, double h) {
+  }
+  // Their derivatives by a central difference of `set` (called with +h, −h, then 0 to restore).
+  Probe probe(const std::function<void(double)>& set, double h) {
     set(h);
     const Probe plus = evaluate();
     set(-h);
@@ -292,67 +235,168 @@ StateSpace linearize_system(const scenarios::Scenario& s, const scenarios::Exper
     d.gate_q = (plus.gate_q - minus.gate_q) / (2.0 * h);
     d.out = (plus.out - minus.out) / (2.0 * h);
     return d;
-  };
-  StateSpace sys;
-  sys.canal_unknowns = unknowns;
-  sys.C = Eigen::RowVectorXd::Zero(size);
-  sys.B = Eigen::VectorXd::Zero(size);
-  auto add_reservoir_rows = [&](int column, double dq, double dv, double di, Eigen::VectorXd* vector) {
+  }
+
+  // The reservoir rows of a column (into A) or of the input (into B when `vector`).
+  void add_reservoir_rows(int column, double dq, double dv, double di, Eigen::VectorXd* vector = nullptr) {
     if (!reservoir.o) return;
     const auto rows = reservoir.rows(dq, dv, di);
     for (int k = 0; k < reservoir.states(); ++k) {
-      if (rows[static_cast<std::size_t>(k)] == 0.0) continue;
-      if (vector) (*vector)(unknowns + k) = rows[static_cast<std::size_t>(k)];
-      else triplets.emplace_back(unknowns + k, column, rows[static_cast<std::size_t>(k)]);
+      const double value = rows[static_cast<std::size_t>(k)];
+      if (value == 0.0) continue;
+      if (vector) (*vector)(unknowns + k) = value;
+      else triplets.emplace_back(unknowns + k, column, value);
     }
-  };
+  }
 
-  // Canal columns read by the output or (with a reservoir) by the head gate's discharge.
-  std::vector<int> cells = output.cells;
-  if (reservoir.o) {
-    for (int c : cells_around(canal, 0, 0, 2)) cells.push_back(c);
+  void start() {
+    unknowns = 2 * canal().total_cells();
+    u0.resize(static_cast<std::size_t>(unknowns));
+    solver::store_state(canal(), u0.data());
+    u = u0;
+    if (built.reservoir) {
+      gates::Reservoir& tank = built.reservoir->reservoir();
+      const double q = canal().reach(0).discharge().front();
+      tank.start_at_steady_state(q);
+      reservoir.o = &tank.options();
+      const double f = q / tank.options().flow_per_hz;
+      reservoir.saturated = !(f > tank.options().min_frequency && f < tank.options().max_frequency);
+    }
+    // Typical sizes, as the Newton solver takes them: the largest |A|, and the largest |Q| (at
+    // least 1e-3 of that area per second).
+    double a_scale = 1e-12, q_scale = 1e-9;
+    for (int k = 0; k < unknowns; k += 2) {
+      a_scale = std::max(a_scale, std::abs(u0[static_cast<std::size_t>(k)]));
+      q_scale = std::max(q_scale, std::abs(u0[static_cast<std::size_t>(k + 1)]));
+    }
+    scale.resize(u0.size());
+    for (std::size_t k = 0; k < scale.size(); k += 2) {
+      scale[k] = a_scale;
+      scale[k + 1] = std::max(q_scale, 1e-3 * a_scale);
+    }
+    const int size = unknowns + reservoir.states();
+    sys.canal_unknowns = unknowns;
+    sys.B = Eigen::VectorXd::Zero(size);
+    sys.C = Eigen::RowVectorXd::Zero(size);
   }
-  std::sort(cells.begin(), cells.end());
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  for (int c : cells) {
-    for (int m = 0; m < 2; ++m) {
-      const auto j = static_cast<std::size_t>(2 * c + m);
-      const double h = kProbeStep * std::max(std::abs(u0[j]), scale[j]);
-      const Probe d = probe([&](double delta) {
-        u[j] = u0[j] + delta;
-        solver::load_state(canal, u.data());
-      }, h);
-      sys.C(static_cast<int>(j)) = d.out;
-      add_reservoir_rows(static_cast<int>(j), d.gate_q, 0.0, 0.0, nullptr);
+
+  // A_UU: the scheme's band by coloured forward differences (solver/rates_jacobian.hpp).
+  bool add_canal_jacobian() {
+    std::vector<double> f0;
+    canal().evaluate_rates(time(), f0, kKinks);
+    const solver::RatesPattern pattern = solver::rates_jacobian_pattern(unknowns / 2);
+    std::vector<double> values(pattern.row.size());
+    int evaluations = 0;
+    if (!solver::rates_jacobian(canal(), time(), u.data(), f0.data(), scale, pattern, {kJacobianStep, kKinks},
+                                values.data(), &evaluations)) {
+      return false;
+    }
+    triplets.reserve(values.size() + 64);
+    for (std::size_t j = 0; j + 1 < pattern.column_start.size(); ++j) {
+      for (auto k = pattern.column_start[j]; k < pattern.column_start[j + 1]; ++k) {
+        const auto entry = static_cast<std::size_t>(k);
+        triplets.emplace_back(static_cast<int>(pattern.row[entry]), static_cast<int>(j), values[entry]);
+      }
+    }
+    return true;
+  }
+
+  // C, and the reservoir rows, for the canal unknowns the output or the head gate's discharge
+  // read (the band of A already holds their effect on the rates).
+  void add_probed_cells() {
+    std::vector<int> cells = output.cells;
+    if (reservoir.o) {
+      for (int c : cells_around(canal(), 0, 0, 2)) cells.push_back(c);
+    }
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    for (int c : cells) {
+      for (int m = 0; m < 2; ++m) {
+        const auto j = static_cast<std::size_t>(2 * c + m);
+        const double h = kProbeStep * std::max(std::abs(u0[j]), scale[j]);
+        const Probe d = probe([&](double delta) {
+          u[j] = u0[j] + delta;
+          solver::load_state(canal(), u.data());
+        }, h);
+        sys.C(static_cast<int>(j)) = d.out;
+        add_reservoir_rows(static_cast<int>(j), d.gate_q, 0.0, 0.0);
+      }
     }
   }
-  if (reservoir.o) {
-    gates::Reservoir& tank = b.reservoir->reservoir();
+
+  // The reservoir's columns: its volume changes the head gate's flux (rates near the gate, the
+  // output when it is the gate's discharge); its integral acts on the pump only.
+  void add_reservoir_columns() {
+    if (!reservoir.o) return;
+    gates::Reservoir& tank = built.reservoir->reservoir();
     const double v0 = tank.volume();
     const Probe d = probe([&](double delta) { tank.set_volume(v0 + delta); }, kProbeStep * v0);
     for (int row = 0; row < unknowns; ++row) {
-      if (d.rates[static_cast<std::size_t>(row)] != 0.0) triplets.emplace_back(row, unknowns, d.rates[static_cast<std::size_t>(row)]);
+      const double value = d.rates[static_cast<std::size_t>(row)];
+      if (value != 0.0) triplets.emplace_back(row, unknowns, value);
     }
     sys.C(unknowns) = d.out;
-    add_reservoir_rows(unknowns, d.gate_q, 1.0, 0.0, nullptr);
-    // The integral acts on the pump only (no effect on the canal's rates or the output).
-    if (!reservoir.saturated) add_reservoir_rows(unknowns + 1, 0.0, 0.0, 1.0, nullptr);
+    add_reservoir_rows(unknowns, d.gate_q, 1.0, 0.0);
+    if (!reservoir.saturated) add_reservoir_rows(unknowns + 1, 0.0, 0.0, 1.0);
   }
-  {
-    const double u_op = input.value;
-    const Probe d = probe([&](double delta) { input.set(u_op + delta); }, kProbeStep * input.scale);
+
+  // B and D.
+  void add_input(const InputHandle& input) {
+    const double operating = input.value;
+    const Probe d = probe([&](double delta) { input.set(operating + delta); }, kProbeStep * input.scale);
     for (int row = 0; row < unknowns; ++row) sys.B(row) = d.rates[static_cast<std::size_t>(row)];
     sys.D = d.out;
     add_reservoir_rows(-1, d.gate_q, 0.0, 0.0, &sys.B);
   }
-  // Explicit (possibly zero) diagonal entries: the frequency sweep writes iω − A_ii there.
-  for (int k = 0; k < size; ++k) triplets.emplace_back(k, k, 0.0);
-  sys.A.resize(size, size);
-  sys.A.setFromTriplets(triplets.begin(), triplets.end());
-  sys.A.makeCompressed();
-  sys.output_delay_s = output.level ? sensors.delay_s : 0.0;
-  sys.nyquist = grid_nyquist(canal);
-  return sys;
+
+  void finish() {
+    // Explicit (possibly zero) diagonal entries: the frequency sweep writes iω − A_ii there.
+    const auto size = static_cast<int>(sys.B.size());
+    for (int k = 0; k < size; ++k) triplets.emplace_back(k, k, 0.0);
+    sys.A.resize(size, size);
+    sys.A.setFromTriplets(triplets.begin(), triplets.end());
+    sys.A.makeCompressed();
+    sys.nyquist = grid_nyquist(canal());
+  }
+};
+
+}  // namespace
+
+StateSpace linearize_system(const scenarios::Scenario& s, const scenarios::ExperimentSpec& experiment,
+                            const InputChoice& input_choice, const OutputChoice& output_choice, std::string* note) {
+  // The operating point: the experiment's command held at its operating opening, before events.
+  scenarios::ExperimentSpec e = experiment;
+  e.input.kind = scenarios::InputKind::constant;
+  e.events.clear();
+  BuiltCanal b = scenarios::build_canal(s, e);
+  b.canal.set_time(0.0);
+  b.controlled->reset(0.0, b.controlled->command(0.0));
+  const scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+  const InputHandle input = find_input(b, s, input_choice);
+  const OutputHandle output = find_output(b, s, sensors, output_choice);
+
+  solver::SteadyStateOptions steady;
+  steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
+  const solver::SteadyStateSummary summary = solver::solve_steady_state(b.canal, steady);
+  if (!summary.status) {
+    throw InputError(s.source + ": experiment '" + e.name + "': no steady state at the operating point (" +
+                     summary.status.message() + ")");
+  }
+  if (note) *note = "steady state (Newton, " + std::to_string(summary.iterations) + " iterations)";
+  b.canal.set_time(0.0);
+
+  Assembly assembly{b, output, {}, 0, {}, {}, {}, {}, {}};
+  assembly.start();
+  if (!assembly.add_canal_jacobian()) {
+    throw InputError(s.source + ": experiment '" + e.name +
+                     "': the scheme cannot be evaluated next to the steady state (dry or non-finite cells)");
+  }
+  assembly.add_probed_cells();
+  assembly.add_reservoir_columns();
+  assembly.add_input(input);
+  assembly.finish();
+  assembly.sys.output_delay_s = output.level ? sensors.delay_s : 0.0;
+  return assembly.sys;
 }
 
 }  // namespace canalsim::linearize
