@@ -308,3 +308,51 @@ TEST(AsceCanal2, StaticGainsMatchNeighbouringSteadyStates) {
 
 }  // namespace
 }  // namespace canalsim::linearize
+
+namespace canalsim::linearize {
+namespace {
+
+// On the frictionless pool every limiter slope sits on its kink (a flat steady state): the
+// nonlinear scheme's small-amplitude response there is what the centred-kink rule has to match.
+// The inflow follows Q + a sin ωt through events every 10 ms (each holding the mid-interval value).
+TEST(FrictionlessPool, TheCentredKinkRuleMatchesTheNonlinearSchemeAtAFlatState) {
+  const int cells = 400;
+  const double x = 0.5 * kLength / cells + 200 * kLength / cells;
+  scenarios::Scenario s = frictionless_pool(x, cells);
+  const StateSpace sys = linearize_system(s, s.experiments.front(), {InputKind::inflow, 0}, {OutputKind::y_dw, 0});
+  for (const double omega : {0.2, 0.8}) {
+    scenarios::ExperimentSpec e = s.experiments.front();
+    const double amplitude = 0.01 * kInflow, hold = 0.01, period = 2.0 * M_PI / omega;
+    const double settle = 150.0, fitted = period * std::ceil(40.0 / period);
+    e.duration_s = settle + fitted;
+    for (double t = 0.0; t < e.duration_s; t += hold) {
+      scenarios::EventSpec event;
+      event.t_s = t;
+      event.inflow_m3s = kInflow + amplitude * std::sin(omega * (t + 0.5 * hold));
+      e.events.push_back(event);
+    }
+    scenarios::SensorSpec sensors = s.sensors;
+    sensors.period_s = 0.02;
+    sensors.resolution_mm = 0.0;
+    e.sensors = sensors;
+    const Recording rec = scenarios::simulate(s, e);
+    const auto& time = rec.column("t_s");
+    const auto& y = rec.column("y_dw_mm");
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < time.size(); ++k) {
+      if (time[k] < settle || time[k] >= settle + fitted - 1e-9) continue;
+      const Eigen::Vector3d basis(1.0, std::sin(omega * time[k]), std::cos(omega * time[k]));
+      m += basis * basis.transpose();
+      rhs += basis * y[k] * 1e-3;
+    }
+    const Eigen::Vector3d c = m.ldlt().solve(rhs);
+    const Complex simulated = Complex(c(1), c(2)) / amplitude;
+    const Complex linear = frequency_response(sys, {omega}).front();
+    EXPECT_NEAR(std::abs(linear) / std::abs(simulated), 1.0, 0.02) << "omega " << omega << ": " << linear << " vs " << simulated;
+    EXPECT_LT(phase_error_degrees(linear, simulated), 2.0) << "omega " << omega << ": " << linear << " vs " << simulated;
+  }
+}
+
+}  // namespace
+}  // namespace canalsim::linearize
