@@ -17,7 +17,7 @@ TEST(Linearize, BadChoicesFailWithOneLineAndWriteNothing) {
     std::ofstream keep(scratch / "keep.json");
     keep << "old\n";
   }
-  const std::vector<std::pair<std::string, std::string>> cases = {
+  std::vector<std::pair<std::string, std::string>> cases = {
       {"lab -e op2 --freq 0:1:10", "--freq = '0:1:10': the frequencies must be positive"},
       {"lab -e op2 --freq 1:2:0", "--freq = '1:2:0': N must be a whole number >= 1"},
       {"lab -e op2 --freq 1:1e4:10", "is beyond the grid's Nyquist frequency"},
@@ -27,6 +27,15 @@ TEST(Linearize, BadChoicesFailWithOneLineAndWriteNothing) {
       {"lab -e op2 --output y_check2", "--output y_check2: scenario 'lab' has pools 1..1"},
       {"lab -e op9", "--experiment op9: scenario 'lab' has no such experiment"},
   };
+  {
+    // A pool filled through a closed end has no steady state.
+    std::ofstream toml(scratch / "filling.toml");
+    toml << "name = \"filling\"\n[upstream]\nkind = \"discharge\"\ndischarge_m3s = 0.01\n[[pools]]\n"
+            "length_m = 10.0\nbottom_width_m = 0.2\nwall_height_m = 0.5\ncells = 50\ninitial_depth_m = 0.1\n"
+            "[downstream]\nkind = \"closed\"\n[[experiments]]\nname = \"fill\"\n[experiments.input]\n"
+            "kind = \"constant\"\n";
+  }
+  cases.emplace_back("filling.toml -e fill --input inflow", "experiment 'fill': no steady state at the operating point");
   for (const auto& [args, message] : cases) {
     const RunResult r = run_canalsim("linearize " + args + " --json keep.json", scratch);
     EXPECT_TRUE(is_one_error_line(r)) << args << " -> " << r.code << ": " << r.err;
