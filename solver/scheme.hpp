@@ -106,12 +106,17 @@ inline double van_leer_slope(double am, double a0, double ap) {
 }
 
 // The slope of the linearisation at a limiter's kink (StageSettings::centred_kinks): the limited
-// slope where the data are clearly monotone (d₋ d₊ > tolerance²), the centred one elsewhere.
+// slope where it is clearly differentiable, the centred one elsewhere. van Leer's limiter has its
+// kink where d₋d₊ <= 0; the generalised minmod also where its two smallest candidates θd₋, θd₊,
+// (d₋ + d₊)/2 meet (e.g. d₋ = d₊ on a linear profile, where it switches between them).
 inline double slope_centred_at_kinks(double am, double a0, double ap, double tolerance, bool van_leer,
                                      double theta) {
-  const double d1 = a0 - am, d2 = ap - a0;
-  if (!(d1 * d2 > tolerance * tolerance)) return 0.5 * (ap - am);
-  return van_leer ? van_leer_slope(am, a0, ap) : limited_slope(am, a0, ap, theta);
+  const double d1 = a0 - am, d2 = ap - a0, centred = 0.5 * (ap - am);
+  if (!(d1 * d2 > tolerance * tolerance)) return centred;
+  if (van_leer) return van_leer_slope(am, a0, ap);
+  double c[3] = {std::abs(theta * d1), std::abs(theta * d2), std::abs(centred)};
+  std::sort(c, c + 3);
+  return c[1] - c[0] > tolerance ? limited_slope(am, a0, ap, theta) : centred;
 }
 
 inline void end_slopes(const double* h, const double* eta, const double* u, double* dh, double* deta,

@@ -356,3 +356,22 @@ TEST(FrictionlessPool, TheCentredKinkRuleMatchesTheNonlinearSchemeAtAFlatState) 
 
 }  // namespace
 }  // namespace canalsim::linearize
+
+namespace canalsim::linearize {
+namespace {
+
+// With the generalised minmod limiter the lab pool's nearly linear level profile puts most
+// slopes on minmod's switch between d₋ and d₊ (a kink): a one-sided finite difference there gave
+// a static gain of 0.207 where the steady states give 0.524; the centred-kink rule gives it back.
+TEST(LabCanal, StaticGainWithTheMinmodLimiterMatchesNeighbouringSteadyStates) {
+  scenarios::Scenario lab = scenarios::builtin_scenario("lab");
+  lab.numerics.van_leer_limiter = false;
+  const scenarios::ExperimentSpec& op = *lab.find_experiment("op2");
+  const double gain = static_gain(linearize_system(lab, op, {InputKind::gate, 0}, {OutputKind::y_dwe, 0}));
+  const double difference = (steady_end_depth(lab, op, op.operating_opening_mm + 0.2) -
+                             steady_end_depth(lab, op, op.operating_opening_mm - 0.2)) / 0.4e-3;
+  EXPECT_NEAR(gain / difference, 1.0, 1e-3) << "linearised " << gain << ", Newton " << difference;
+}
+
+}  // namespace
+}  // namespace canalsim::linearize
