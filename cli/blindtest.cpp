@@ -45,7 +45,7 @@ void run(const BlindtestArguments& args) {
     options.model = m;
     if (options.effects.empty()) options.effects = {"gate_rate_limit", "sensor_quantization"};
   }
-  if (const std::string problem = options.validate(); !problem.empty()) throw InputError("blindtest: " + problem);
+  if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
   ProgressLine progress("blind test, " + std::to_string(args.trials) + " trials on " +
                         std::to_string(args.threads) + " threads");
   options.progress = progress.callback();

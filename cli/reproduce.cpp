@@ -105,7 +105,7 @@ void run_reproduce(const ReproduceArguments& args) {
   const PrbsDesign design = design_prbs(9, 0.5);  // the lab experiments' PRBS (paper Section 4.3)
   options.prbs_clock_s = design.clock_period;
   options.prbs_stages = design.stages;
-  if (const auto why = options.validate(); !why.empty()) throw InputError(why);
+  if (const Status status = options.validate(); !status) throw InputError(status.message());
 
   ProgressLine progress("canalsim reproduce");
   options.progress = progress.callback();

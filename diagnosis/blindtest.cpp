@@ -41,25 +41,19 @@ std::vector<std::string> effect_names(const BlindtestOptions& o) {
 
 }  // namespace
 
-std::string BlindtestOptions::validate() const {
-  std::ostringstream out;
-  if (trials < 1) out << "trials = " << trials << ": expected >= 1";
-  else if (threads < 1) out << "threads = " << threads << ": expected >= 1";
-  else if (experiments.empty()) out << "experiments: expected at least one";
-  else if (!(duration_s == 0.0 || duration_s >= 20.0)) out << "duration_s = " << duration_s << ": expected 0 or >= 20";
-  else if (!(noise_std_mm >= 0.0)) out << "noise_std_mm = " << noise_std_mm << ": expected >= 0";
-  else {
-    for (const auto& e : effects) {
-      if (!effect_from_name(e)) {
-        out << "effects: unknown effect '" << e << "' (expected one of " << catalog_names() << ")";
-        break;
-      }
-    }
-    if (out.str().empty()) {
-      if (const std::string d = diagnose.validate(); !d.empty()) out << "diagnose." << d;
-    }
+Status BlindtestOptions::validate() const {
+  Validator check;
+  check.require(trials >= 1, "trials", trials, ">= 1");
+  check.require(threads >= 1, "threads", threads, ">= 1");
+  check.require(!experiments.empty(), "experiments", "expected at least one");
+  check.require(duration_s == 0.0 || duration_s >= 20.0, "duration_s", duration_s, "0 or >= 20");
+  check.require(noise_std_mm >= 0.0, "noise_std_mm", noise_std_mm, ">= 0");
+  for (const auto& e : effects) {
+    check.require(effect_from_name(e).has_value(), "effects",
+                  "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
-  return out.str();
+  check.nested("diagnose", diagnose.validate());
+  return check.status();
 }
 
 ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng) {
@@ -97,7 +91,7 @@ double parameter_error(const ConcealedEffect& truth, double estimate) {
 }
 
 BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
-  if (const std::string problem = o.validate(); !problem.empty()) throw InputError("blindtest options: " + problem);
+  if (const Status status = o.validate(); !status) throw InputError("blindtest options: " + status.message());
   const auto started = std::chrono::steady_clock::now();
   std::vector<scenarios::ExperimentSpec> experiments;
   for (const auto& name : o.experiments) {

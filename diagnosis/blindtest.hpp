@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/status.hpp"
 #include "core/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
@@ -42,7 +43,7 @@ struct BlindtestOptions {
   // (gate_rate_limit, sensor_quantization).
   std::optional<ModelDiagnoseOptions> model;
   ProgressCallback progress;  // share of the trials done
-  [[nodiscard]] std::string validate() const;
+  Status validate() const;
 };
 
 struct ConcealedEffect {

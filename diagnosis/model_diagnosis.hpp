@@ -51,7 +51,7 @@ struct ModelDiagnoseOptions {
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;
-  [[nodiscard]] std::string validate() const;
+  Status validate() const;
 };
 
 // The effect names `diagnose --model` knows: the scenario catalog's and the three of reduced

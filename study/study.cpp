@@ -14,15 +14,16 @@ namespace canalsim::study {
 
 using namespace canalsim::reduced;
 
-std::string StudyOptions::validate() const {
-  if (const auto why = gamma.validate(); !why.empty()) return "StudyOptions.gamma: " + why;
-  if (gamma.first < 0.0 || gamma.last > 50.0) return "StudyOptions.gamma: expected within [0, 50]";
-  if (threads < 1) return "StudyOptions.threads: expected at least 1";
-  if (!(prbs_clock_s > 0.0) || !std::isfinite(prbs_clock_s)) {
-    return "StudyOptions.prbs_clock_s: expected a positive clock period in s";
-  }
-  if (prbs_stages < 2 || prbs_stages > 20) return "StudyOptions.prbs_stages: expected 2 to 20";
-  return "";
+Status StudyOptions::validate() const {
+  Validator check;
+  const std::string gamma_problem = gamma.validate();
+  check.require(gamma_problem.empty(), "StudyOptions.gamma", gamma_problem);
+  check.require(gamma.first >= 0.0 && gamma.last <= 50.0, "StudyOptions.gamma", "expected within [0, 50]");
+  check.require(threads >= 1, "StudyOptions.threads", "expected at least 1");
+  check.require(prbs_clock_s > 0.0 && std::isfinite(prbs_clock_s), "StudyOptions.prbs_clock_s",
+                "expected a positive clock period in s");
+  check.require(prbs_stages >= 2 && prbs_stages <= 20, "StudyOptions.prbs_stages", "expected 2 to 20");
+  return check.status();
 }
 
 std::vector<std::string> ExperimentRoles::all() const {
@@ -221,7 +222,7 @@ RegimeSummary regime_summary(const std::string& name, const Recording& rec, cons
 
 StudyResult run_study(const std::map<std::string, Recording>& recordings, const StudyOptions& options,
                       const ExperimentRoles& roles) {
-  if (const auto why = options.validate(); !why.empty()) throw InputError(why);
+  if (const Status status = options.validate(); !status) throw InputError(status.message());
   const auto start = std::chrono::steady_clock::now();
   std::map<std::string, ExperimentData> data;
   for (const auto& name : roles.all()) {

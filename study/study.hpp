@@ -32,6 +32,7 @@
 
 #include "core/progress.hpp"
 #include "core/recording.hpp"
+#include "core/status.hpp"
 #include "reduced_models/identification.hpp"
 #include "study/claims.hpp"
 
@@ -59,7 +60,7 @@ struct StudyOptions {
   // Samples kept per plotted series in report.html (every k-th sample); 0 = all.
   std::size_t plot_points = 1200;
 
-  std::string validate() const;  // empty when valid, else one line naming the field
+  Status validate() const;  // ok, or one line naming the field
 };
 
 // Experiments the study needs and what they stand for in the paper.
