@@ -25,6 +25,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
+#include "core/status.hpp"
 #include "linearize/fractional_fit.hpp"
 #include "scenarios/scenario.hpp"
 
@@ -79,6 +80,9 @@ struct LinearizeOptions {
   OutputChoice output;
   FrequencyGrid grid;
   int poles = 6;  // how many poles nearest the imaginary axis to report, [0, 50]
+  // The grid (count 0: the default; else 0 < low <= high, 1 <= count <= 100000, low = high for
+  // one point) and poles (core/status.hpp convention). The Nyquist limit is checked by linearize().
+  Status validate() const;
 };
 
 struct FrequencyResponse {

@@ -228,11 +228,21 @@ double delay_from_phase(const std::vector<double>& omega, const std::vector<Comp
   return -(count * swp - sw * sp) / denominator;
 }
 
+Status LinearizeOptions::validate() const {
+  Validator v;
+  v.require(poles >= 0 && poles <= 50, "poles", poles, "an integer in [0, 50]");
+  if (grid.count != 0) {
+    v.require(grid.low > 0.0, "grid.low", grid.low, "a frequency > 0 rad/s")
+        .require(grid.high >= grid.low, "grid.high", grid.high, "a frequency >= grid.low")
+        .require(grid.count >= 1 && grid.count <= 100000, "grid.count", grid.count, "1..100000 (0: the default grid)")
+        .require(grid.count != 1 || grid.high == grid.low, "grid.count", grid.count, "more than 1 when grid.low < grid.high");
+  }
+  return v.status();
+}
+
 FrequencyResponse linearize(const scenarios::Scenario& s, const scenarios::ExperimentSpec& e,
                             const LinearizeOptions& options) {
-  if (options.poles < 0 || options.poles > 50) {
-    throw InputError("poles = " + std::to_string(options.poles) + ": expected an integer in [0, 50]");
-  }
+  if (const Status status = options.validate(); !status) throw InputError(status.message());
   FrequencyResponse r;
   r.system = linearize_system(s, e, options.input, options.output, &r.steady_state);
   const double nyquist = r.system.nyquist;

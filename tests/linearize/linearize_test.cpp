@@ -220,7 +220,13 @@ TEST(Choices, BadInputsNameTheFlagAndWhatIsAllowed) {
   }
   LinearizeOptions options;
   options.grid = {1.0, 1e4, 10};
+  EXPECT_TRUE(options.validate());
   EXPECT_THROW(linearize(lab, lab.experiments.front(), options), InputError);  // beyond Nyquist
+  options.grid = {0.0, 1.0, 10};
+  EXPECT_EQ(options.validate().field(), "grid.low");
+  options.grid = {};
+  options.poles = 51;
+  EXPECT_EQ(options.validate().message(), "poles = 51: expected an integer in [0, 50]");
 }
 
 }  // namespace
