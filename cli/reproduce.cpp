@@ -122,6 +122,7 @@ void run_reproduce(const ReproduceArguments& args) {
   const auto bode = study::bode_sections(scenarios::builtin_scenario("lab"), result);
   const std::string bode_json = study::bode_json(bode).dump(1) + "\n";
   const std::string bode_md = study::bode_markdown(bode);
+  const std::string bode_html = study::bode_html(bode);
   progress.finish();
 
   // Write: all or nothing.
@@ -132,7 +133,7 @@ void run_reproduce(const ReproduceArguments& args) {
   }
   const std::vector<std::pair<fs::path, const std::string*>> files = {
       {dir / "tables.json", &json}, {dir / "tables.md", &md}, {dir / "report.html", &html},
-      {dir / "bode.json", &bode_json}, {dir / "bode.md", &bode_md}};
+      {dir / "bode.json", &bode_json}, {dir / "bode.md", &bode_md}, {dir / "bode.html", &bode_html}};
   std::vector<fs::path> written;
   try {
     for (const auto& [file, text] : files) {

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/format.hpp"
+#include "core/html.hpp"
 #include "linearize/linearize.hpp"
 #include "reduced_models/frequency.hpp"
 
@@ -30,6 +31,60 @@ double rms_relative(const std::vector<Complex>& model, const std::vector<Complex
 }
 
 std::string percent(double fraction) { return format_fixed(100.0 * fraction, 1) + " %"; }
+
+// Phase [deg] unwrapped along the grid.
+std::vector<double> unwrapped_degrees(const std::vector<Complex>& g) {
+  std::vector<double> p(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    p[k] = std::arg(g[k]) * 180.0 / M_PI;
+    if (k > 0) {
+      while (p[k] - p[k - 1] > 180.0) p[k] -= 360.0;
+      while (p[k] - p[k - 1] < -180.0) p[k] += 360.0;
+    }
+  }
+  return p;
+}
+
+// One SVG panel: curves y(log ω) scaled into a 640 x 220 box with the band's ends on the axis.
+std::string svg_panel(const std::vector<double>& omega, const std::vector<std::vector<double>>& curves,
+                      const std::string& y_label) {
+  const char* colours[] = {"#000000", "#1f77b4", "#d62728"};
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& c : curves) {
+    for (double v : c) {
+      if (!std::isfinite(v)) continue;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  if (!(hi > lo)) hi = lo + 1.0;
+  const double w = 640, h = 220, left = 60, bottom = 30;
+  const double x0 = std::log10(omega.front()), x1 = std::log10(omega.back());
+  auto px = [&](double om) { return left + (w - left - 10) * (std::log10(om) - x0) / (x1 - x0); };
+  auto py = [&](double v) { return 10 + (h - bottom - 10) * (hi - v) / (hi - lo); };
+  std::ostringstream svg;
+  svg << "<svg width=\"" << w << "\" height=\"" << h << "\" xmlns=\"http://www.w3.org/2000/svg\">"
+      << "<rect x=\"" << left << "\" y=\"10\" width=\"" << w - left - 10 << "\" height=\"" << h - bottom - 10
+      << "\" fill=\"none\" stroke=\"#999\"/>";
+  for (int decade = static_cast<int>(std::ceil(x0)); decade <= static_cast<int>(std::floor(x1)); ++decade) {
+    const double x = px(std::pow(10.0, decade));
+    svg << "<line x1=\"" << x << "\" y1=\"10\" x2=\"" << x << "\" y2=\"" << h - bottom << "\" stroke=\"#ddd\"/>"
+        << "<text x=\"" << x << "\" y=\"" << h - 12 << "\" font-size=\"11\" text-anchor=\"middle\">1e"
+        << decade << "</text>";
+  }
+  svg << "<text x=\"4\" y=\"14\" font-size=\"11\">" << format_g(hi, 3) << "</text><text x=\"4\" y=\""
+      << h - bottom << "\" font-size=\"11\">" << format_g(lo, 3) << "</text><text x=\"4\" y=\"" << h / 2
+      << "\" font-size=\"11\">" << html::escape(y_label) << "</text>";
+  for (std::size_t c = 0; c < curves.size(); ++c) {
+    svg << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[c % 3] << "\" points=\"";
+    for (std::size_t k = 0; k < omega.size(); ++k) {
+      if (std::isfinite(curves[c][k])) svg << format_g(px(omega[k]), 5) << "," << format_g(py(curves[c][k]), 5) << " ";
+    }
+    svg << "\"/>";
+  }
+  svg << "</svg>";
+  return svg.str();
+}
 
 }  // namespace
 
@@ -123,18 +178,7 @@ std::string bode_markdown(const std::vector<BodeSection>& sections) {
        << b.sentence << "\n\n| ω [rad/s] | PDE gain | LIOM gain | LFOM gain | PDE phase ° | LIOM phase ° | LFOM phase ° |\n"
        << "|---:|---:|---:|---:|---:|---:|---:|\n";
     // Phases unwrapped along the whole grid, then sampled.
-    auto unwrap = [&](const std::vector<Complex>& g) {
-      std::vector<double> p(g.size());
-      for (std::size_t k = 0; k < g.size(); ++k) {
-        p[k] = std::arg(g[k]) * 180.0 / M_PI;
-        if (k > 0) {
-          while (p[k] - p[k - 1] > 180.0) p[k] -= 360.0;
-          while (p[k] - p[k - 1] < -180.0) p[k] += 360.0;
-        }
-      }
-      return p;
-    };
-    const auto pp = unwrap(b.pde), pi = unwrap(b.liom), pf = unwrap(b.lfom);
+    const auto pp = unwrapped_degrees(b.pde), pi = unwrapped_degrees(b.liom), pf = unwrapped_degrees(b.lfom);
     for (std::size_t k = 0; k < b.omega.size(); k += std::max<std::size_t>(1, b.omega.size() / 12)) {
       md << "| " << format_g(b.omega[k], 3) << " | " << format_g(std::abs(b.pde[k]), 3) << " | "
          << format_g(std::abs(b.liom[k]), 3) << " | " << format_g(std::abs(b.lfom[k]), 3) << " | "
@@ -143,6 +187,31 @@ std::string bode_markdown(const std::vector<BodeSection>& sections) {
     md << "\n";
   }
   return md.str();
+}
+
+std::string bode_html(const std::vector<BodeSection>& sections) {
+  std::ostringstream page;
+  page << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Bode: the linearised pool and the fitted "
+          "models</title></head><body style=\"font-family:sans-serif;max-width:700px\">"
+       << "<h1>Bode: the linearised pool against the fitted LIOM and LFOM</h1><p>Gate → y_dwe in mm/mm over each "
+          "experiment's PRBS band (docs/linearization.md). <span style=\"color:#000\">PDE (linearised)</span>, "
+          "<span style=\"color:#1f77b4\">LIOM</span>, <span style=\"color:#d62728\">LFOM</span> fitted to the "
+          "recording.</p>";
+  for (const auto& b : sections) {
+    auto db = [](const std::vector<Complex>& g) {
+      std::vector<double> out;
+      for (const auto& v : g) out.push_back(20.0 * std::log10(std::abs(v)));
+      return out;
+    };
+    page << "<h2>" << html::escape(b.experiment) << " (" << format_g(b.operating_opening_mm, 3) << " mm)</h2><p>"
+         << html::escape(b.sentence) << "</p>"
+         << svg_panel(b.omega, {db(b.pde), db(b.liom), db(b.lfom)}, "dB")
+         << svg_panel(b.omega, {unwrapped_degrees(b.pde), unwrapped_degrees(b.liom), unwrapped_degrees(b.lfom)}, "deg")
+         << "<p style=\"font-size:small\">ω [rad/s], " << format_g(b.band.low, 3) << " to " << format_g(b.band.high, 3)
+         << "</p>";
+  }
+  page << "</body></html>\n";
+  return page.str();
 }
 
 }  // namespace canalsim::study

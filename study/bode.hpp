@@ -2,7 +2,7 @@
 // linearised Saint-Venant pool's frequency response (gate → y_dwe) over the PRBS band beside
 // those of the LIOM and LFOM fitted to the recording in the time domain, and one computed
 // sentence saying whether the pool is fractional in that band. `canalsim reproduce` writes it as
-// bode.md and bode.json next to the tables (which stay as they were).
+// bode.md, bode.json and bode.html next to the tables (which stay as they were).
 #pragma once
 
 #include <complex>
@@ -41,5 +41,8 @@ std::string fractionality_sentence(const BodeSection& section);
 
 nlohmann::json bode_json(const std::vector<BodeSection>& sections);
 std::string bode_markdown(const std::vector<BodeSection>& sections);
+// A self-contained page: per operating point its sentence and a Bode plot (gain in dB, phase in
+// degrees against log ω) of the PDE, the LIOM and the LFOM, drawn as inline SVG (no script).
+std::string bode_html(const std::vector<BodeSection>& sections);
 
 }  // namespace canalsim::study
