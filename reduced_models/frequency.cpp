@@ -37,12 +37,22 @@ std::complex<double> frequency_response(const Model& m, const OperatingPoint& op
   using Complex = std::complex<double>;
   const ModelParameters& p = m.p;
   const Complex s(0.0, omega);
-  const Complex delay = std::exp(-s * p.L);
-  const double gain = linearised_gain(m, op);
-  if (m.kind == ModelKind::sopd) return gain * delay / ((p.T * s + 1.0) * (p.T2 * s + 1.0));
-  const double lambda = is_fractional(m.kind) ? p.lambda : 1.0;
-  const Complex s_lambda = std::pow(omega, lambda) * std::exp(Complex(0.0, lambda * M_PI / 2.0));
-  return gain * delay / (p.T * s_lambda + 1.0);
+  const Complex delayed_gain = linearised_gain(m, op) * std::exp(-s * p.L);
+  // (iω)^λ on the principal branch.
+  const auto fractional_lag = [&](double lambda) {
+    return p.T * std::pow(omega, lambda) * std::exp(Complex(0.0, lambda * M_PI / 2.0)) + 1.0;
+  };
+  switch (m.kind) {  // no default: a new model kind must say its transfer function here
+    case ModelKind::sopd: return delayed_gain / ((p.T * s + 1.0) * (p.T2 * s + 1.0));
+    case ModelKind::liom:
+    case ModelKind::nliom_f:
+    case ModelKind::nliom_s: return delayed_gain / (p.T * s + 1.0);
+    case ModelKind::lfom:
+    case ModelKind::nlfom_f:
+    case ModelKind::nlfom_s:
+    case ModelKind::hybrid: return delayed_gain / fractional_lag(p.lambda);
+  }
+  return {NAN, NAN};
 }
 
 }  // namespace canalsim::reduced
