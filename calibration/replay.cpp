@@ -78,6 +78,22 @@ Recording clocked_drive(const Recording& rec, double op, const std::vector<doubl
   return drive;
 }
 
+// Where the recording starts (Replay::initial_upstream_mm).
+double initial_upstream(const Recording& rec) {
+  const std::string meta = rec.meta("initial_y_up_mm");
+  char* end = nullptr;
+  const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
+  if (!meta.empty() && end && *end == '\0' && std::isfinite(parsed)) return parsed;
+  if (!rec.has(columns::upstream_level)) return std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double>& t = rec.column(columns::time);
+  const std::vector<double>& u = rec.column(columns::gate_command);
+  const std::vector<double>& y = rec.column(columns::upstream_level);
+  double sum = 0.0;
+  std::size_t k = 0;
+  for (; k < y.size() && (k == 0 || (u[k] == u[0] && t[k] - t[0] <= 1.0)); ++k) sum += y[k];
+  return sum / static_cast<double>(k);
+}
+
 }  // namespace
 
 const scenarios::GateSpec* controlled_gate(const Scenario& s) {
@@ -110,6 +126,7 @@ Replay prepare_replay(const Recording& rec, const Scenario& scenario, const Repl
     if (rec.has(c)) p.data[c] = tail(rec.column(c));
   }
   p.operating_point_mm = operating_point(rec, scenario);
+  p.initial_upstream_mm = initial_upstream(rec);
   p.drive = sampled_drive(rec, p.operating_point_mm, o.command_lead_samples * period, period);
   const bool upstream_replayed = o.use_recorded_upstream && rec.has(columns::upstream_level);
   if (o.reconstruct_clock && !upstream_replayed) {
@@ -122,7 +139,17 @@ Replay prepare_replay(const Recording& rec, const Scenario& scenario, const Repl
   return p;
 }
 
-Channels replay_true(const Scenario& s, const Replay& p, const ReplayOptions& o) {
+Channels replay_true(const Scenario& scenario, const Replay& p, const ReplayOptions& o) {
+  const bool own_start = o.start_at_recorded_level && std::isfinite(p.initial_upstream_mm) &&
+                         (scenario.upstream.kind == scenarios::UpstreamKind::level ||
+                          scenario.upstream.kind == scenarios::UpstreamKind::reservoir);
+  Scenario started;
+  if (own_start) {
+    started = scenario;
+    const double offset = scenario.sensors.offset_mm + scenario.sensors.offset_y_up_mm;
+    started.upstream.level_m = std::max(1e-4, (p.initial_upstream_mm - offset) * 1e-3);
+  }
+  const Scenario& s = own_start ? started : scenario;
   scenarios::ExperimentSpec e;
   e.name = p.name;
   e.operating_opening_mm = p.operating_point_mm;
@@ -138,6 +165,7 @@ Channels replay_true(const Scenario& s, const Replay& p, const ReplayOptions& o)
   so.drive.recording = &p.drive;
   so.drive.use_recorded_upstream = o.use_recorded_upstream && p.drive.has(columns::upstream_level);
   so.settle_time = o.settle_time_s;
+  so.warning = o.warning;
   const Recording r = scenarios::simulate(s, e, so);
   Channels out;
   for (const auto& [c, y] : p.data) {

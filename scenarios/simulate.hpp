@@ -76,6 +76,13 @@ struct SimulateOptions {
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
+  // When Newton fails: throw std::runtime_error naming the failure (true), or march for
+  // settle_time with the command held at its operating point and warn, naming the state the
+  // experiment then starts from (false). Never silent.
+  bool require_steady_state = false;
+  // Receives that warning (one line, without the "canalsim: warning: " prefix); unset, it is
+  // printed to stderr.
+  std::function<void(const std::string&)> warning;
   // Called with the canal at the end of the run (tests read the volume balance and final state).
   std::function<void(const BuiltCanal&)> on_finish;
 };
