@@ -36,6 +36,9 @@ struct ReplayOptions {
   // consistent with every sampled change, the replay switches at the reconstructed instants
   // instead (command_switch_times), which removes the sampling jitter of the input.
   bool reconstruct_clock = true;
+  // Also when the recorded upstream level is replayed: the drive then holds rows at the sample
+  // and the switch instants (off keeps the diagnosis' sampled drive in that case).
+  bool clock_with_upstream = false;
   double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
   // Leading seconds of every recording left out of the compared series: what happened before
   // the recording started is unknown, so its first transient may differ.
@@ -44,6 +47,9 @@ struct ReplayOptions {
   // (Replay::initial_upstream_mm, less the scenario's y_up sensor offsets) instead of the
   // scenario's upstream level_m (upstream kinds "level" and "reservoir").
   bool start_at_recorded_level = false;
+  // End time steps at the command's switching instants (SimulateOptions::step_to_command_changes):
+  // the replay is then continuous in the scenario's parameters, which finite differences need.
+  bool step_to_command_changes = false;
   // Called with a warning of the simulation (a failed steady state, see scenarios/simulate.hpp);
   // unset, it is printed to stderr.
   std::function<void(const std::string&)> warning;

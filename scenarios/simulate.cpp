@@ -455,6 +455,17 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   };
   TrueState before = snapshot(), after = before;
   std::size_t next_event = 0;
+  // Instants at which the drive's command changes (SimulateOptions::step_to_command_changes).
+  std::vector<double> breaks;
+  if (options.step_to_command_changes && options.drive.recording) {
+    const auto& dt = options.drive.recording->column(columns::time);
+    const auto& du = options.drive.recording->column(columns::gate_command);
+    for (std::size_t i = 1; i < dt.size(); ++i) {
+      if (du[i] != du[i - 1] && dt[i] > 0.0) breaks.push_back(dt[i]);
+    }
+  }
+  std::size_t next_break = 0;
+  constexpr double just_after = 1e-9;  // s: the zero-order-hold command takes its new value from t_i on
   for (std::size_t k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * h;
     while (after.time < t) {
@@ -464,8 +475,11 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
       }
       const double to_event = next_event < e.events.size() ? e.events[next_event].t_s - b.canal.time()
                                                            : std::numeric_limits<double>::infinity();
+      while (next_break < breaks.size() && breaks[next_break] <= b.canal.time()) ++next_break;
+      const double to_break = next_break < breaks.size() ? breaks[next_break] - b.canal.time() + just_after
+                                                         : std::numeric_limits<double>::infinity();
       before = after;
-      check(b.canal.step(to_event), "experiment " + e.name);
+      check(b.canal.step(std::min(to_event, to_break)), "experiment " + e.name);
       after = snapshot();
     }
     const TrueState now = interpolate(before, after, t);

@@ -80,6 +80,11 @@ struct SimulateOptions {
   // settle_time with the command held at its operating point and warn, naming the state the
   // experiment then starts from (false). Never silent.
   bool require_steady_state = false;
+  // End a time step at every instant the drive recording's command changes (just after it), so
+  // that the gate switches exactly then rather than at the first step boundary after it. The
+  // response is then continuous in the scenario's parameters (calibration differentiates it);
+  // off by default, which keeps earlier results bit for bit.
+  bool step_to_command_changes = false;
   // Receives that warning (one line, without the "canalsim: warning: " prefix); unset, it is
   // printed to stderr.
   std::function<void(const std::string&)> warning;
