@@ -1,5 +1,7 @@
 #include "scenarios/simulate.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,11 +20,6 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-std::string format_number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
 
 solver::SolverOptions solver_options(const NumericsSpec& n) {
   solver::SolverOptions o;
@@ -318,13 +315,13 @@ void warn_marched_start(const BuiltCanal& b, const Scenario& s, const Experiment
                         const std::string& failure, double marching) {
   const std::string what = s.source + ": experiment " + e.name + ": the steady state (Newton) failed (" + failure + ")";
   if (options.require_steady_state) throw std::runtime_error(what);
-  std::string state = "the gate held at " + format_number(b.controlled->opening(-1e-9) / kMm) + " mm, levels";
+  std::string state = "the gate held at " + format_g(b.controlled->opening(-1e-9) / kMm) + " mm, levels";
   for (int r = 0; r < b.canal.reach_count(); ++r) {
     const auto& reach = b.canal.reach(r);
-    state += (r ? "; " : " ") + format_number(reach.level(0) / kMm) + " .. " +
-             format_number(reach.level(reach.cells() - 1) / kMm) + " mm";
+    state += (r ? "; " : " ") + format_g(reach.level(0) / kMm) + " .. " +
+             format_g(reach.level(reach.cells() - 1) / kMm) + " mm";
   }
-  const std::string message = what + "; it starts after " + format_number(marching) +
+  const std::string message = what + "; it starts after " + format_g(marching) +
                               " s of time marching instead, from " + state;
   if (options.warning) {
     options.warning(message);
@@ -377,7 +374,7 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
       check(b.canal.advance_to(-marching + marching * k / 20.0), "settling");
       report(result.progress_weight * k / 20.0);
     }
-    const std::string marched = "time marching " + format_number(marching) + " s";
+    const std::string marched = "time marching " + format_g(marching) + " s";
     result.description = solved ? result.description + ", then " + marched
                                 : marched + (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
   }
@@ -399,7 +396,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   // Start from the steady state of the operating point (the command holds its t = 0 value before
   // t = 0): Newton on the discretised equations, or time marching if that fails or is not wanted.
   const auto report = [&](double fraction) {
-    if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
+    if (options.progress) options.progress({std::clamp(fraction, 0.0, 1.0), ""});
   };
   const InitialState initial = settle(b, s, e, options, report);
 
@@ -507,8 +504,8 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.source = s.name + "/" + e.name;
   rec.set_meta("scenario", s.name);
   rec.set_meta("experiment", e.name);
-  rec.set_meta("operating_opening_mm", format_number(e.operating_opening_mm));
-  rec.set_meta("sampling_period_s", format_number(h));
+  rec.set_meta("operating_opening_mm", format_g(e.operating_opening_mm));
+  rec.set_meta("sampling_period_s", format_g(h));
   rec.set_meta("generator", "canalsim simulate");
   rec.set_meta("initial_state", initial.description);
   rec.set_column(columns::time, t_s);

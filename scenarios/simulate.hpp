@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gates/structures.hpp"
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 #include "solver/canal.hpp"
@@ -71,7 +72,7 @@ struct Drive {
 
 struct SimulateOptions {
   // Called with the fraction done in [0, 1], about every 1% of the run.
-  std::function<void(double)> progress;
+  ProgressCallback progress;
   Drive drive;
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
@@ -85,8 +86,8 @@ struct SimulateOptions {
   // response is then continuous in the scenario's parameters (calibration differentiates it);
   // off by default, which keeps earlier results bit for bit.
   bool step_to_command_changes = false;
-  // Receives that warning (one line, without the "canalsim: warning: " prefix); unset, it is
-  // printed to stderr.
+  // Receives the failed-steady-state warning (one line, without the "canalsim: warning: "
+  // prefix); unset, it is printed to stderr.
   std::function<void(const std::string&)> warning;
   // Called with the canal at the end of the run (tests read the volume balance and final state).
   std::function<void(const BuiltCanal&)> on_finish;
