@@ -54,12 +54,14 @@ std::string text_summary(const Calibration& c) {
       out << "\n";
     }
   }
-  out << "\n" << pad("recording", 14) << pad("channel", 10) << lpad("RMS before", 12) << lpad("after", 10)
+  std::size_t rw = 10;
+  for (const auto& f : c.fits) rw = std::max(rw, std::min<std::size_t>(f.recording.size(), 30) + 3);
+  out << "\n" << pad("recording", rw) << pad("channel", 10) << lpad("RMS before", 12) << lpad("after", 10)
       << lpad("Nrmse before", 14) << lpad("after", 9) << "\n";
   for (const auto& f : c.fits) {
     std::string name = f.recording;
-    if (name.size() > 13) name = "…" + name.substr(name.size() - 12);
-    out << pad(name + (f.validation ? "*" : ""), 14) << pad(f.channel, 10) << lpad(format_fixed(f.rms_before, 3), 12)
+    if (name.size() > 30) name = "..." + name.substr(name.size() - 27);
+    out << pad(name + (f.validation ? " *" : ""), rw) << pad(f.channel, 10) << lpad(format_fixed(f.rms_before, 3), 12)
         << lpad(format_fixed(f.rms_after, 3), 10) << lpad(format_fixed(f.nrmse_before, 1) + " %", 14)
         << lpad(format_fixed(f.nrmse_after, 1) + " %", 9) << "\n";
   }
