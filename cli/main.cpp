@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
   canalsim::cli::add_reproduce_command(app);
   canalsim::cli::add_scenarios_command(app);
   canalsim::cli::add_simulate_command(app);
+  canalsim::cli::add_calibrate_command(app);
   canalsim::cli::add_diagnose_command(app);
   canalsim::cli::add_blindtest_command(app);
   canalsim::cli::add_linearize_command(app);

@@ -9,7 +9,7 @@ CANALSIM_PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsundials-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev
+  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev libceres-dev
 )
 
 canalsim_log() { printf '==> %s\n' "$*" >&2; }
