@@ -100,4 +100,27 @@ ExperimentData leading_samples(const ExperimentData& data, std::size_t n) {
   return out;
 }
 
+ExperimentData block_average(const ExperimentData& data, std::size_t factor) {
+  if (factor <= 1) return data;
+  ExperimentData out = data;
+  const std::size_t blocks = std::max<std::size_t>(1, data.size() / factor);
+  const auto average = [&](const std::vector<double>& v) {
+    if (v.empty()) return v;
+    std::vector<double> a(blocks, 0.0);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t begin = b * factor, end = std::min(v.size(), begin + factor);
+      a[b] = std::accumulate(v.begin() + static_cast<long>(begin), v.begin() + static_cast<long>(end), 0.0) /
+             static_cast<double>(end - begin);
+    }
+    return a;
+  };
+  out.t_s = average(data.t_s);
+  out.u_mm = average(data.u_mm);
+  out.y_dwe_mm = average(data.y_dwe_mm);
+  out.y_up_mm = average(data.y_up_mm);
+  out.x_up_mm = average(data.x_up_mm);
+  out.h = data.h * static_cast<double>(factor);
+  return out;
+}
+
 }  // namespace canalsim::reduced

@@ -53,6 +53,11 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
 // The first `n` samples of an experiment (all of it when shorter), operating point unchanged.
 ExperimentData leading_samples(const ExperimentData& data, std::size_t n);
 
+// Block averages of `factor` consecutive samples (the last, partial block dropped unless it is the
+// only one): a copy at period factor·h that keeps the whole record's slow dynamics, for searches
+// that need not resolve every sample. Operating point unchanged.
+ExperimentData block_average(const ExperimentData& data, std::size_t factor);
+
 // Reads a recording and prepares it (the everyday entry point for files).
 ExperimentData load_experiment(const std::string& file, const DataOptions& options = {});
 

@@ -41,8 +41,9 @@ class Problem {
   // Cost (IAE or IAE_c) of the model `m`; with K profiled, m.p.K is set to the optimal gain.
   double cost(Model& m);
 
-  // Delay grid (stage 1) for a linear model: returns the start with the best whole-sample shift.
-  Model delay_grid();
+  // Stage 1 for a linear model (delay_search.cpp): the cost profiled over every whole-sample
+  // delay on a grid of dynamics; returns the best (K, T, λ, T2, L) as the start of refine().
+  Model delay_search();
 
   // Coarse scans before the local refinement (the IAE is multimodal in γ, and for the hybrid in
   // the split of the gain between the regimes): alternately scans the exponents (γ, γ_sub) on a
@@ -50,11 +51,12 @@ class Problem {
   // best. About 30–60 cost evaluations.
   Model coarse_starts(const Model& start);
 
-  // Stage 2: NLopt from `start` with L bracketed around start.p.L. Returns the best model.
-  // `step_scale` scales NLopt's initial steps (1 = a fresh search, < 1 = polishing a good start);
-  // `restarts` < 0 takes the count from the options.
+  // Stage 2: NLopt from `start` with L bracketed within ±`bracket_s` of start.p.L (0: two
+  // samples; the bracket follows L when L ends on its edge). Returns the best model, never worse
+  // than `start`. `step_scale` scales NLopt's initial steps (1 = a fresh search, < 1 = polishing
+  // a good start); `restarts` < 0 takes the count from the options.
   Model refine(const Model& start, double& best_cost, bool& converged, std::string& message,
-               double step_scale = 1.0, int restarts = -1);
+               double step_scale = 1.0, int restarts = -1, double bracket_s = 0.0);
 
  private:
   Model run_nlopt(const Model& start, double L_lo, double L_hi, bool alternate, double& best_cost,
