@@ -1,6 +1,11 @@
 // `canalsim fit`: an unwritable --json is refused before any recording is read or fitted; the
-// uncertainty index of a parameter whose nominal value is 0 is printed as undefined, not inf%.
+// uncertainty index of a parameter whose nominal value is 0 is printed as undefined, not inf%;
+// --bounds and --start are checked against the model's parameter names; the table shows whole
+// recording names.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
 
 #include "tests/cli/cli_run.hpp"
 
@@ -31,6 +36,55 @@ TEST(Fit, UncertaintyIndexOfAZeroNominalParameterIsUndefinedNotInfinite) {
   EXPECT_EQ(r.out.find("inf%"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("nan%"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("gamma undefined (nominal 0)"), std::string::npos) << r.out;
+  fs::remove_all(scratch);
+}
+
+// A first-order-plus-delay step (K 2, T 20 s, L 1.5 s) sampled at 0.125 s, in closed form.
+void write_step_recording(const fs::path& file) {
+  std::ofstream out(file);
+  out << "t_s,u_mm,y_dwe_mm\n";
+  for (int k = 0; k < 1200; ++k) {
+    const double t = 0.125 * k, since = t - 5.0 - 1.5;
+    const double y = 45.0 + (since > 0 ? 10.0 * (1.0 - std::exp(-since / 20.0)) : 0.0);
+    out << t << "," << (t >= 5.0 ? 25 : 20) << "," << y << "\n";
+  }
+}
+
+TEST(Fit, BoundsAndStartNameTheModelsParametersAndBadOnesAreOneLineErrors) {
+  const fs::path scratch = scratch_dir("fit_bounds");
+  write_step_recording(scratch / "step.csv");
+  const RunResult ok = run_canalsim("fit --model liom step.csv --bounds T=1:100,L=0:10 --start T=5", scratch);
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  const RunResult pinned = run_canalsim("fit --model liom step.csv --bounds T=5:6", scratch);
+  EXPECT_EQ(pinned.code, 0) << pinned.err;
+  EXPECT_NE(pinned.out.find("         6 "), std::string::npos) << pinned.out;  // T on its upper bound
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--bounds lambda=0:1", "liom has no parameter lambda (expected K, T, L)"},
+      {"--bounds T=5", "expected LO:HI"},
+      {"--bounds T=a:5", "'a' is not a finite number"},
+      {"--bounds T=5:1", "lower bound above upper bound"},
+      {"--bounds T", "expected NAME=LO:HI"},
+      {"--start T=1,T=2", "parameter T given twice"},
+      {"--start Q=1", "liom has no parameter Q"},
+      {"--bounds T=1:10 --start T=50", "bounds.T: initial value 50 lies outside [1, 10]"}};
+  for (const auto& [flags, message] : bad) {
+    const RunResult r = run_canalsim("fit --model liom step.csv " + flags, scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << flags << ": " << r.code << ": " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << flags << ": " << r.err;
+  }
+  fs::remove_all(scratch);
+}
+
+TEST(Fit, TheTableShowsWholeRecordingNames) {
+  const fs::path scratch = scratch_dir("fit_names");
+  const std::string name = "pool3_gate_step_2026-11-20_run07_decimated_0.125s.csv";
+  write_step_recording(scratch / name);
+  fs::create_directory(scratch / "other");
+  write_step_recording(scratch / "other" / name);
+  const RunResult r = run_canalsim("fit --model liom " + name + " other/" + name, scratch);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("  " + name + " "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  other/" + name + " "), std::string::npos) << r.out;
   fs::remove_all(scratch);
 }
 
