@@ -327,7 +327,7 @@ void run_fit(const FitArguments& args) {
 void add_fit_command(CLI::App& app) {
   auto args = std::make_shared<FitArguments>();
   auto* cmd = app.add_subcommand(
-      "fit", "Fit a reduced model (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid) "
+      "fit", "Fit a reduced model (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid, id, idz) "
              "to recordings by minimising IAE");
   cmd->add_option("--model,-m", args->model, "Model to fit")->required();
   cmd->add_option("recordings", args->recordings, "Recording CSV files (t_s, u_mm, y_dwe_mm; "

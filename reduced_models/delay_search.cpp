@@ -89,8 +89,16 @@ std::vector<double> time_constant_grid(const ParameterSpec& spec,
 
 }  // namespace
 
+const char* dynamics_parameter(ModelKind kind) {
+  if (kind == ModelKind::id) return nullptr;
+  return kind == ModelKind::idz ? "Tz" : "T";
+}
+
 Model Problem::delay_search() {
-  const auto Ts = candidates(options_.bounds.T, time_constant_grid(options_.bounds.T, data_));
+  // The time scale searched: T (IDZ: its zero's Tz; ID has none, one candidate).
+  const char* scale = dynamics_parameter(kind_);
+  const auto& Tspec = options_.bounds[scale ? scale : "T"];
+  const auto Ts = scale ? candidates(Tspec, time_constant_grid(Tspec, data_)) : std::vector<double>{1.0};
   const auto lambdas = is_fractional(kind_) ? candidates(options_.bounds.lambda, {0.5, 0.75, 1.0})
                                             : std::vector<double>{1.0};
   const auto& Lspec = options_.bounds.L;
@@ -122,7 +130,7 @@ Model Problem::delay_search() {
   const auto try_dynamics = [&](double T, double lambda) {
     Model m = base_;
     m.p.K = 1.0;
-    m.p.T = T;
+    if (scale) set_parameter(m.p, scale, T);
     m.p.lambda = lambda;
     if (kind_ == ModelKind::sopd) {
       const auto& t2 = options_.bounds.T2;
@@ -167,9 +175,8 @@ Model Problem::delay_search() {
   // A second, fine pass between the coarse grid's neighbours of the best time constant (steps of
   // 4 %): the delay that goes with a time constant moves with it, so the coarse grid's spacing
   // alone would leave L several samples off for a slow pool.
-  const auto& Tspec = options_.bounds.T;
-  if (!Tspec.fixed && !Tspec.initial) {
-    const double centre = best.p.T, lambda = best.p.lambda;
+  if (scale && !Tspec.fixed && !Tspec.initial) {
+    const double centre = get_parameter(best.p, scale), lambda = best.p.lambda;
     for (double T = std::max(Tspec.lower, centre / 1.4); T <= std::min(Tspec.upper, centre * 1.4); T *= 1.04) {
       try_dynamics(T, lambda);
     }

@@ -13,7 +13,7 @@ bool output_linear_in_gain(ModelKind kind) {
 }
 
 ModelKind linear_counterpart(ModelKind kind) {
-  if (kind == ModelKind::sopd) return ModelKind::sopd;
+  if (kind == ModelKind::sopd || is_integrating(kind)) return kind;
   return is_fractional(kind) ? ModelKind::lfom : ModelKind::liom;
 }
 
@@ -75,7 +75,7 @@ double Problem::cost(Model& m) {
   const bool lti = is_linear_time_invariant(kind_);
   const std::vector<std::vector<double>>* undelayed_responses = nullptr;
   if (lti) {
-    const std::array<double, 3> key{m.p.T, m.p.lambda, m.p.T2};
+    const std::array<double, 4> key{m.p.T, m.p.lambda, m.p.T2, m.p.Tz};
     for (auto& entry : cache_) {
       if (entry.key == key) {
         entry.last_use = ++cache_clock_;

@@ -24,6 +24,9 @@ bool output_linear_in_gain(ModelKind kind);
 // The linear model whose delay search starts a fit of `kind` (LIOM, SOPD or LFOM).
 ModelKind linear_counterpart(ModelKind kind);
 std::vector<const ExperimentData*> pointers(const std::vector<ExperimentData>& data);
+// The parameter whose scale the delay trades off against and the delay search grids: "T", "Tz"
+// for IDZ, nullptr for ID.
+const char* dynamics_parameter(ModelKind kind);
 // Deviation of the recorded output from the operating point.
 std::vector<double> output_deviation(const ExperimentData& d);
 
@@ -73,7 +76,7 @@ class Problem {
   int simulations_ = 0;  // model simulations (one per recording per evaluation, fewer if cached)
   double step_scale_ = 1.0;
   struct CacheEntry {
-    std::array<double, 3> key{};                  // (T, λ, T2)
+    std::array<double, 4> key{};                  // (T, λ, T2, Tz)
     std::vector<std::vector<double>> responses;   // undelayed unit responses per recording
     unsigned long last_use = 0;
   };

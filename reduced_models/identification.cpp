@@ -70,6 +70,7 @@ std::vector<Nesting> nested_models(ModelKind kind) {
     case ModelKind::nliom_s: return {{ModelKind::liom, "gamma", 0.0}};
     case ModelKind::nlfom_f: return {{ModelKind::nliom_f, "lambda", 1.0}, {ModelKind::lfom, "gamma", 0.0}};
     case ModelKind::nlfom_s: return {{ModelKind::nliom_s, "lambda", 1.0}, {ModelKind::lfom, "gamma", 0.0}};
+    case ModelKind::idz: return {{ModelKind::id, "Tz", 0.0}};
     default: return {};
   }
 }
@@ -106,7 +107,7 @@ FitOptions resolve_bounds(FitOptions options, const std::vector<const Experiment
     shortest = std::min(shortest, d->duration());
   }
   auto& b = options.bounds;
-  for (auto* spec : {&b.T, &b.T2}) {
+  for (auto* spec : {&b.T, &b.T2, &b.Tz}) {
     if (std::isinf(spec->upper)) spec->upper = std::max(spec->lower, 10.0 * longest);
   }
   if (std::isinf(b.L.upper)) b.L.upper = std::max(b.L.lower, 0.5 * shortest);
@@ -197,8 +198,10 @@ class FitSession {
       // The delay that goes with the searched time constant is known to about 0.4 × the 4 %
       // step of the fine T pass: a bracket of ±T/10 (at least two samples) holds it.
       const Model start = problem.delay_search();
+      const char* scale = dynamics_parameter(kind);
+      const double T = scale ? get_parameter(start.p, scale) : 0.0;
       best.model = problem.refine(start, best.cost, best.converged, best.message, 1.0, -1,
-                                  std::max(0.1 * start.p.T, 2.0 * search_data_.front()->h));
+                                  std::max(0.1 * T, 2.0 * search_data_.front()->h));
     } else {
       const Model start = nonlinear_start(problem, search(linear).model);
       best.model = problem.refine(problem.coarse_starts(start), best.cost, best.converged, best.message);
@@ -282,7 +285,7 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
   return r;
 }
 
-const char* const kNames[] = {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub"};
+const char* const kNames[] = {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz"};
 
 }  // namespace
 
@@ -300,6 +303,7 @@ const ParameterSpec& FitBounds::operator[](const std::string& name) const {
   if (name == "L") return L;
   if (name == "K_sub") return K_sub;
   if (name == "gamma_sub") return gamma_sub;
+  if (name == "Tz") return Tz;
   throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
@@ -307,8 +311,8 @@ std::string FitOptions::validate() const {
   for (const char* name : kNames) {
     const auto& s = bounds[name];
     const std::string field = std::string("bounds.") + name;
-    const bool upper_from_data = s.upper == kInf && (std::string(name) == "T" ||
-                                                     std::string(name) == "T2" || std::string(name) == "L");
+    const std::string n = name;
+    const bool upper_from_data = s.upper == kInf && (n == "T" || n == "T2" || n == "Tz" || n == "L");
     if (!std::isfinite(s.lower) || (!std::isfinite(s.upper) && !upper_from_data)) {
       return field + ": bounds must be finite (got [" + format_g(s.lower) + ", " + format_g(s.upper) + "])";
     }
@@ -330,6 +334,7 @@ std::string FitOptions::validate() const {
   }
   if (bounds.T.lower < 0.0) return "bounds.T: lower " + format_g(bounds.T.lower) + " s, expected >= 0";
   if (bounds.T2.lower < 0.0) return "bounds.T2: lower " + format_g(bounds.T2.lower) + " s, expected >= 0";
+  if (bounds.Tz.lower < 0.0) return "bounds.Tz: lower " + format_g(bounds.Tz.lower) + " s, expected >= 0";
   if (bounds.L.lower < 0.0) return "bounds.L: lower " + format_g(bounds.L.lower) + " s, expected >= 0";
   if (bounds.lambda.lower <= 0.0) return "bounds.lambda: lower " + format_g(bounds.lambda.lower) + ", expected > 0";
   if (!(relative_tolerance > 0.0)) return "relative_tolerance: expected > 0";

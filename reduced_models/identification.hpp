@@ -44,8 +44,8 @@ struct FitBounds {
   static constexpr double kFromData = std::numeric_limits<double>::infinity();
 
   ParameterSpec K{-100.0, 100.0, std::nullopt, false};       // mm/mm
-  // Upper bounds of T, T2 and L may be +∞: "from the data", ten times the longest recording for
-  // T and T2, half the shortest for L (the defaults).
+  // Upper bounds of T, T2, Tz and L may be +∞: "from the data", ten times the longest recording
+  // for T, T2 and Tz, half the shortest for L (the defaults). ID and IDZ have K in mm/(mm·s).
   ParameterSpec T{0.01, kFromData, std::nullopt, false};     // s
   ParameterSpec T2{0.0, kFromData, std::nullopt, false};     // s (SOPD)
   ParameterSpec lambda{0.1, 1.5, std::nullopt, false};       // fractional order
@@ -53,6 +53,7 @@ struct FitBounds {
   ParameterSpec L{0.0, kFromData, std::nullopt, false};      // delay, s
   ParameterSpec K_sub{-100.0, 100.0, std::nullopt, false};   // hybrid, mm/mm
   ParameterSpec gamma_sub{0.0, 10.0, std::nullopt, false};   // hybrid
+  ParameterSpec Tz{0.0, kFromData, std::nullopt, false};     // IDZ zero, s
 
   ParameterSpec& operator[](const std::string& name);
   const ParameterSpec& operator[](const std::string& name) const;
