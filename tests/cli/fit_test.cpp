@@ -88,4 +88,31 @@ TEST(Fit, TheTableShowsWholeRecordingNames) {
   fs::remove_all(scratch);
 }
 
+// A logger's jittered time stamps: fit refuses them with a message that names `canalsim
+// resample`; resample writes a uniform recording that fit then reads.
+TEST(Fit, JitteredTimeStampsSuggestResampleWhichMakesThemFittable) {
+  const fs::path scratch = scratch_dir("fit_jitter");
+  {
+    std::ofstream out(scratch / "jitter.csv");
+    out << "t_s,u_mm,y_dwe_mm\n";
+    double t = 0.0;
+    for (int k = 0; k < 4000; ++k, t += (k % 3 == 0 ? 0.009 : 0.0105)) {
+      const double since = t - 5.0 - 1.5;
+      out << t << "," << (t >= 5.0 ? 25 : 20) << "," << 45.0 + (since > 0 ? 10.0 * (1.0 - std::exp(-since / 8.0)) : 0.0) << "\n";
+    }
+  }
+  const RunResult refused = run_canalsim("fit --model liom jitter.csv", scratch);
+  EXPECT_TRUE(is_one_error_line(refused)) << refused.err;
+  EXPECT_NE(refused.err.find("not uniformly sampled"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("canalsim resample jitter.csv -o uniform.csv --period 0.01"), std::string::npos) << refused.err;
+  const RunResult resampled = run_canalsim("resample jitter.csv -o uniform.csv --period 0.05", scratch);
+  EXPECT_EQ(resampled.code, 0) << resampled.err;
+  const RunResult fitted = run_canalsim("fit --model liom uniform.csv", scratch);
+  EXPECT_EQ(fitted.code, 0) << fitted.err;
+  const RunResult bad = run_canalsim("resample jitter.csv -o x.csv --period 0", scratch);
+  EXPECT_TRUE(is_one_error_line(bad)) << bad.err;
+  EXPECT_FALSE(fs::exists(scratch / "x.csv"));
+  fs::remove_all(scratch);
+}
+
 }  // namespace
