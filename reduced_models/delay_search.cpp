@@ -169,8 +169,18 @@ Model Problem::delay_search() {
       }
     }
   };
-  for (double T : Ts) {
-    for (double lambda : lambdas) try_dynamics(T, lambda);
+  // The order nearest 1 over the whole T grid first (λ = 1 is a cheap recursion); the other orders
+  // only within a factor of ten of the time constant found there.
+  const auto first_order = std::min_element(lambdas.begin(), lambdas.end(), [](double a, double b) {
+    return std::abs(a - 1.0) < std::abs(b - 1.0);
+  });
+  for (double T : Ts) try_dynamics(T, *first_order);
+  const double T_first = scale ? get_parameter(best.p, scale) : 0.0;
+  for (double lambda : lambdas) {
+    if (lambda == *first_order) continue;
+    for (double T : Ts) {
+      if (T >= 0.1 * T_first && T <= 10.0 * T_first) try_dynamics(T, lambda);
+    }
   }
   // A second, fine pass between the coarse grid's neighbours of the best time constant (steps of
   // 4 %): the delay that goes with a time constant moves with it, so the coarse grid's spacing

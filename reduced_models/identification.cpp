@@ -140,6 +140,9 @@ class FitSession {
       search_copies_.push_back(block_average(leading_samples(*d, limit * factor), factor));
     }
     for (const auto& d : search_copies_) search_data_.push_back(&d);
+    // Bounds from the data: from the searched part (a leading segment's delay is at most half
+    // of it), unless the caller set them.
+    search_options_ = resolve_bounds(options, search_data_);
     auto& gl = search_options_.simulation.gl;
     gl.memory_terms = std::max<std::size_t>(1, gl.memory_terms / factor);
     // The search's delay is known to about one coarse sample: the polish on the recordings
@@ -158,7 +161,7 @@ class FitSession {
     if (!search_copies_.empty()) {
       Problem whole(kind, data_, options_);
       double cost = 0.0;
-      model = whole.refine(model, cost, converged, message, 0.3, 0, polish_bracket_s_);
+      model = whole.refine(model, cost, converged, message, 0.1, 0, polish_bracket_s_);
       count(whole);
     }
     FitResult r = result(model, converged, message);
