@@ -78,6 +78,8 @@ nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& d
   for (std::size_t i = 0; i < r.sources.size(); ++i) {
     const auto& d = data[which[i]];
     per.push_back({{"recording", r.sources[i]},
+                   {"K_declared_units", r.model.p.K * declared_gain_factor(d)},
+                   {"K_unit", declared_gain_unit(d) + (is_integrating(r.model.kind) ? "/s" : "")},
                    {"iae", r.iae[i]},
                    {"nrmse", r.nrmse[i]},
                    {"u0_mm", d.u0_mm},
@@ -153,6 +155,18 @@ void apply_bounds_and_start(const FitArguments& args, ModelKind kind, FitBounds&
   }
 }
 
+// The unit K is shown in: the recordings' declared units (docs/recording-format.md).
+std::string gain_unit_text(ModelKind kind, const std::vector<ExperimentData>& data) {
+  const std::string per_second = is_integrating(kind) ? "/s" : "";
+  const std::string unit = declared_gain_unit(data.front());
+  for (const auto& d : data) {
+    if (declared_gain_unit(d) != unit || declared_gain_factor(d) != declared_gain_factor(data.front())) {
+      return "K in each recording's declared units" + per_second;
+    }
+  }
+  return "K in " + unit + per_second;
+}
+
 // Table labels: the recordings' file names, or their whole paths where two share a file name.
 std::vector<std::string> recording_labels(const std::vector<std::string>& sources) {
   std::vector<std::string> labels;
@@ -167,11 +181,18 @@ std::vector<std::string> recording_labels(const std::vector<std::string>& source
   return labels;
 }
 
+// One row of a fit table: K is shown times `gain_factor`, i.e. in the recording's declared units.
+struct TableRow {
+  std::string label;
+  const FitResult* fit;
+  double gain_factor = 1.0;
+};
+
 void print_table(const std::string& title, const std::vector<std::string>& names,
-                 const std::vector<std::pair<std::string, const FitResult*>>& rows) {
+                 const std::vector<TableRow>& rows) {
   std::cout << title << "\n";
   std::size_t width = std::string("recording").size();
-  for (const auto& row : rows) width = std::max(width, row.first.size());
+  for (const auto& row : rows) width = std::max(width, row.label.size());
   char buffer[64];
   std::cout << "  " << "recording" << std::string(width - 9, ' ');
   for (const auto& n : names) {
@@ -179,10 +200,11 @@ void print_table(const std::string& title, const std::vector<std::string>& names
     std::cout << buffer;
   }
   std::cout << "  " << std::string(10 - 3, ' ') << "IAE" << "     Nrmse\n";
-  for (const auto& [label, r] : rows) {
+  for (const auto& [label, r, gain_factor] : rows) {
     std::cout << "  " << label << std::string(width - label.size(), ' ');
     for (const auto& n : names) {
-      std::snprintf(buffer, sizeof buffer, " %10.4g", get_parameter(r->model.p, n));
+      const double value = get_parameter(r->model.p, n) * (n == "K" ? gain_factor : 1.0);
+      std::snprintf(buffer, sizeof buffer, " %10.4g", value);
       std::cout << buffer;
     }
     std::snprintf(buffer, sizeof buffer, "  %10.4g  %7.2f%%", r->iae.front(), r->nrmse.front());
@@ -259,16 +281,18 @@ void run_fit(const FitArguments& args) {
 
   // Table.
   const auto names = parameter_names(kind);
-  std::vector<std::pair<std::string, const FitResult*>> rows;
+  std::vector<TableRow> rows;
   const auto labels = recording_labels(args.recordings);
-  for (std::size_t j = 0; j < fits.size(); ++j) rows.emplace_back(labels[j], &fits[j]);
-  print_table(model_name(kind) + " fits (IAE in mm s, Nrmse eq. 19" +
+  for (std::size_t j = 0; j < fits.size(); ++j) {
+    rows.push_back({labels[j], &fits[j], declared_gain_factor(data[j])});
+  }
+  print_table(model_name(kind) + " fits (" + gain_unit_text(kind, data) + ", IAE in mm s, Nrmse eq. 19" +
                   (grid ? ", gamma by best Nrmse over " + args.gamma : std::string()) + ")",
               names, rows);
   std::map<std::string, double> dp;
   if (nominal) {
     std::vector<FitResult> per(nominal->sources.size());
-    std::vector<std::pair<std::string, const FitResult*>> nominal_rows;
+    std::vector<TableRow> nominal_rows;
     for (std::size_t j = 0; j < per.size(); ++j) {
       per[j].model = nominal->model;
       per[j].iae = {nominal->iae[j]};
@@ -277,7 +301,7 @@ void run_fit(const FitArguments& args) {
       per[j].message = nominal->message;
     }
     for (std::size_t j = 0; j < per.size(); ++j) {
-      nominal_rows.emplace_back("nominal @ " + labels[j], &per[j]);
+      nominal_rows.push_back({"nominal @ " + labels[j], &per[j], declared_gain_factor(data[j])});
     }
     print_table("nominal model (minimises IAE_c, eq. 21; IAE_c = " + fixed(nominal->iae_total, 4) +
                     ")",

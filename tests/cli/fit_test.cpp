@@ -88,6 +88,34 @@ TEST(Fit, TheTableShowsWholeRecordingNames) {
   fs::remove_all(scratch);
 }
 
+// A command in encoder counts of 0.13 mm: K is reported in mm/counts, the same gain as the
+// recording in millimetres (K 2 mm/mm = 0.26 mm/count).
+TEST(Fit, KIsReportedInTheRecordingsDeclaredUnits) {
+  const fs::path scratch = scratch_dir("fit_units");
+  write_step_recording(scratch / "mm.csv");
+  {
+    std::ifstream in(scratch / "mm.csv");
+    std::ofstream out(scratch / "counts.csv");
+    out << "# u_unit: counts\n# u_scale_mm_per_unit: 0.13\n";
+    std::string line;
+    std::getline(in, line);
+    out << line << "\n";
+    while (std::getline(in, line)) {
+      const auto a = line.find(','), b = line.find(',', a + 1);
+      const double u = std::stod(line.substr(a + 1, b - a - 1));
+      out << line.substr(0, a) << "," << u / 0.13 << line.substr(b) << "\n";
+    }
+  }
+  const RunResult r = run_canalsim("fit --model liom counts.csv --json fit.json", scratch);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("K in mm/counts"), std::string::npos) << r.out;
+  const std::string json = read_text(scratch / "fit.json");
+  const auto at = json.find("\"K_declared_units\": ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_NEAR(std::stod(json.substr(at + 20)), 0.26, 0.26 * 0.03) << json.substr(at, 60);
+  fs::remove_all(scratch);
+}
+
 // A logger's jittered time stamps: fit refuses them with a message that names `canalsim
 // resample`; resample writes a uniform recording that fit then reads.
 TEST(Fit, JitteredTimeStampsSuggestResampleWhichMakesThemFittable) {
