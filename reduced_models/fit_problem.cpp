@@ -265,8 +265,10 @@ Model Problem::run_nlopt(const Model& start, double L_lo, double L_hi, bool alte
     const double width = hi[i] - lo[i];
     // L: a quarter of the bracket, at least half a sample (a slow pool's delay trades off against
     // its time constant along a long valley that steps of a sample only crawl along).
+    // Others: a quarter of their value (relative: bounds from the data may span decades), or 2 %
+    // of the bounds' width for a parameter at 0.
     double s = name == "L" ? std::max(0.5 * data_.front()->h, 0.125 * width)
-                           : std::max(0.1 * std::abs(x[i]), 0.02 * width);
+                           : (x[i] != 0.0 ? 0.25 * std::abs(x[i]) : 0.02 * width);
     if (name == "gamma" || name == "gamma_sub") s = 0.2;
     if (name == "lambda") s = 0.05;
     s = std::min(s * step_scale_, 0.5 * width);
