@@ -7,6 +7,7 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "core/format.hpp"
 #include "core/recording.hpp"
 #include "core/resample.hpp"
 
@@ -26,7 +27,7 @@ void run_resample(const ResampleArguments& args) {
   options.period_s = args.period_s;
   const Recording out = resample(in, options);
   write_recording(args.output, out);
-  std::cout << "wrote " << args.output << " (" << out.size() << " samples, " << detail::format_number(args.period_s)
+  std::cout << "wrote " << args.output << " (" << out.size() << " samples, " << format_g(args.period_s)
             << " s, from " << in.size() << ")\n";
 }
 

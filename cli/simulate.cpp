@@ -9,7 +9,6 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "cli/progress.hpp"
 #include "scenarios/builtin.hpp"
 #include "core/recording.hpp"
 #include "scenarios/simulate.hpp"
@@ -96,8 +95,8 @@ void run(const SimulateArguments& args) {
   for (std::size_t i = 0; i < chosen.size(); ++i) {
     const auto* e = chosen[i];
     scenarios::SimulateOptions options;
-    Progress progress("simulating " + s.name + "/" + e->name);
-    options.progress = [&progress](double f) { progress.update(f); };
+    ProgressLine progress("simulating " + s.name + "/" + e->name);
+    options.progress = progress.callback();
     const Recording rec = scenarios::simulate(s, *e, options);
     progress.finish();
     // Created only now, so that a run that fails in its first simulation leaves no directory.

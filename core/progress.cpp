@@ -13,8 +13,11 @@ ProgressLine::~ProgressLine() { finish(); }
 void ProgressLine::report(const ProgressReport& report, bool force) {
   const std::lock_guard lock(mutex_);
   const auto now = std::chrono::steady_clock::now();
+  // A terminal shows the first report at once and then at most 10 a second; a log gets a line
+  // only once the work has run 5 s, and then every 5 s, so short commands leave logs clean.
   const auto gap = tty_ ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
-  if (!force && shown_ && now - last_ < gap) return;
+  const auto since = shown_ ? last_ : start_;
+  if (!force && (shown_ || !tty_) && now - since < gap) return;
   last_ = now;
   shown_ = true;
   const double elapsed = std::chrono::duration<double>(now - start_).count();

@@ -20,9 +20,10 @@ struct ProgressReport {
 // several threads at once (the printer below locks).
 using ProgressCallback = std::function<void(const ProgressReport&)>;
 
-// A progress line on stderr, "LABEL [  3.2 s]: 42% message": rewritten in place on a terminal (at
-// most 10 times a second); on a pipe or file a line at most every 5 s, so logs stay readable.
-// The first report is always shown, so a user sees within moments that the work has started.
+// A progress line on stderr, "LABEL [  3.2 s]: 42% message": on a terminal rewritten in place, the
+// first report at once and then at most 10 times a second; on a pipe or file a line every 5 s once
+// the work has run 5 s, so logs stay readable and short commands print nothing. `force` shows a
+// report (a stage change) whatever the timing.
 class ProgressLine {
  public:
   explicit ProgressLine(std::string label);

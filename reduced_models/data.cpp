@@ -1,5 +1,7 @@
 #include "reduced_models/data.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <cstdlib>
 #include <cmath>
@@ -19,11 +21,6 @@ std::optional<double> operating_point_mm(const Recording& recording) {
   return value;
 }
 
-std::string number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 // The declared unit and scale of the command ("u") or the levels ("y"): (unit, mm per unit).
 std::pair<std::string, double> declared_unit(const Recording& recording, const std::string& source,
@@ -56,7 +53,7 @@ std::string declared_gain_unit(const ExperimentData& data) { return data.y_unit 
 
 std::string DataOptions::validate() const {
   if (upstream_level_mm && !(std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0)) {
-    return "DataOptions.upstream_level_mm: " + number(*upstream_level_mm) +
+    return "DataOptions.upstream_level_mm: " + format_g(*upstream_level_mm) +
            ", expected a positive level in mm";
   }
   if (u0_mm && !std::isfinite(*u0_mm)) return "DataOptions.u0_mm: expected a finite value";
@@ -97,7 +94,7 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
 
   const auto [umin, umax] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
   if (*umax - *umin <= options.min_excitation_mm) {
-    throw InputError(source + ": u_mm is constant (" + number(*umin) +
+    throw InputError(source + ": u_mm is constant (" + format_g(*umin) +
                      " mm): the input has no excitation, so no model can be identified "
                      "(expected e.g. a PRBS around the operating point)");
   }

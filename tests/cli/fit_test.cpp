@@ -7,7 +7,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
 namespace {

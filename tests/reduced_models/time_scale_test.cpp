@@ -12,7 +12,7 @@
 #include <random>
 
 #include "reduced_models/identification.hpp"
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
 namespace {
