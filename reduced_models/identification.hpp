@@ -2,19 +2,21 @@
 // (eq. 21) for a nominal model over several recordings — under bounds with NLopt's
 // derivative-free bounded optimisers.
 //
-// Method (per fit):
-//  1. Delay grid. The delay enters through a sampled shift, so the cost is flat in L between
-//     samples and a gradient says nothing. The linear counterpart of the model (LIOM for the
-//     integer models, SOPD for SOPD, LFOM for the fractional ones) is simulated once per start
-//     from a small grid of (T, λ); for every whole-sample shift inside the L bounds the gain is
-//     set by least squares and the IAE computed (O(n) per shift). The best shift brackets L.
-//  2. Refinement. NLopt (BOBYQA by default) minimises the IAE over all free parameters with L
-//     continuous (fractional samples by linear interpolation) inside ±2 samples of the grid
-//     optimum; the bracket is re-centred when L ends on its edge. For the linear models K is
-//     profiled out exactly: for given (T, λ, L) the IAE-optimal gain is the weighted median of
-//     y_i/g_i with weights |g_i| (g = unit-gain response), clipped to the K bounds.
-//  3. Nonlinear models start from the linear fit (their head term is normalised by the mean
-//     head, so K starts at the linear gain) and refine all their parameters.
+// Method (per fit; docs/reduced-models.md, "Identification"):
+//  1. Delay search (delay_search.cpp). The cost of the linear counterpart (LIOM for the integer
+//     models, SOPD, LFOM for the fractional ones, ID, IDZ) is profiled over every whole-sample
+//     delay inside the L bounds for time constants on a grid spanning a quarter sample to three
+//     record lengths (K by least squares at each delay; all delays at once by FFT correlation).
+//  2. Refinement (fit_problem.cpp). NLopt (BOBYQA by default, restarts alternating with SBPLX)
+//     minimises the IAE over all free parameters with L continuous (fractional samples by linear
+//     interpolation) inside ±max(T/10, 2 samples) of the search's delay, re-centred when L ends on
+//     its edge. For the models linear in K it is profiled out exactly: the IAE-optimal gain is the
+//     weighted median of y_i/g_i with weights |g_i| (g = unit-gain response), clipped to its bounds.
+//  3. Nonlinear models start from their linear counterpart's fit (their head term is normalised
+//     by the mean head, so K starts at the linear gain) and refine all their parameters.
+//  4. A model that contains another (LFOM ⊃ LIOM, NLIOM ⊃ LIOM, NLFOM ⊃ NLIOM and LFOM, IDZ ⊃ ID)
+//     is also refined from that model's optimum and never fits worse than it.
+//  Long records are searched on at most `search_samples` (block-averaged) samples, then polished.
 // γ is fitted like any parameter unless fixed; gamma_sweep() instead fixes γ on a grid and picks
 // the γ with the best Nrmse (eq. 19), as in the paper's Figures 8 and 10.
 #pragma once
