@@ -1,5 +1,5 @@
 // Subcommands of the canalsim program: one file per subcommand, each registering itself on the
-// application. The CLI only parses arguments and calls the libraries (DESIGN.md).
+// application. The CLI only parses arguments and calls the libraries (docs/architecture.md).
 #pragma once
 
 #include <CLI/CLI.hpp>
