@@ -19,6 +19,8 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "cli/freq_check.hpp"
+#include "scenarios/builtin.hpp"
 #include "reduced_models/identification.hpp"
 #include "core/progress.hpp"
 #include "core/recording.hpp"
@@ -42,6 +44,7 @@ struct FitArguments {
   unsigned threads = 2;
   std::string bounds;  // NAME=LO:HI,...
   std::string start;   // NAME=V,...
+  std::string freq_check;  // scenario the recordings were simulated from
 };
 
 std::string fixed(double v, int digits) {
@@ -234,6 +237,13 @@ void run_fit(const FitArguments& args) {
   if (args.memory != "short" && args.memory != "full") {
     throw InputError("--memory " + args.memory + ": expected short or full");
   }
+  // --freq-check: the scenario and each recording's experiment, before any fit.
+  std::optional<scenarios::Scenario> check_scenario;
+  std::vector<const scenarios::ExperimentSpec*> check_experiments;
+  if (!args.freq_check.empty()) {
+    check_scenario = scenarios::load_scenario_or_builtin(args.freq_check);
+    check_experiments = freq_check_experiments(*check_scenario, args.recordings);
+  }
   DataOptions data_options;
   data_options.upstream_level_mm = args.upstream_level_mm;
   std::vector<ExperimentData> data;
@@ -316,8 +326,12 @@ void run_fit(const FitArguments& args) {
     std::cout << "\n";
   }
 
+  nlohmann::json freq_check;
+  if (check_scenario) freq_check = print_freq_check(*check_scenario, check_experiments, fits, data);
+
   if (args.json.empty()) return;
   nlohmann::json out;
+  if (check_scenario) out["freq_check"] = freq_check;
   out["model"] = model_name(kind);
   out["options"] = {{"quantum_mm", args.quantum_mm},
                     {"gate_speed_mm_s", args.gate_speed_mm_s},
@@ -381,6 +395,9 @@ void add_fit_command(CLI::App& app) {
                   "Parameter bounds NAME=LO:HI,... (e.g. T=1:600,L=0:30; names as in the table)");
   cmd->add_option("--start", args->start, "Starting values NAME=V,... (e.g. T=120,L=4)");
   cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(thread_count());
+  cmd->add_option("--freq-check", args->freq_check,
+                  "Scenario the recordings were simulated from: compare each fitted model's frequency response "
+                  "with the linearised pool's over the PRBS band (docs/linearization.md)");
   cmd->callback([args] { run_fit(*args); });
 }
 

@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   canalsim::cli::add_simulate_command(app);
   canalsim::cli::add_diagnose_command(app);
   canalsim::cli::add_blindtest_command(app);
+  canalsim::cli::add_linearize_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,4 +12,9 @@ std::string format_g(double value, int significant = 6);
 // Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or nan.
 std::string format_fixed(double value, int decimals);
 
+// An estimate with its standard deviation, "0.0123 ± 0.0041": the deviation to two significant
+// digits and the value to the same decimal place (so a small deviation never prints as ± 0.000).
+// A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)".
+std::string format_estimate(double value, double std);
+
 }  // namespace canalsim

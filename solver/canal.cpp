@@ -90,11 +90,11 @@ void Canal::restore_start_state() {
   }
 }
 
-double Canal::compute_fluxes(double t) {
+double Canal::compute_fluxes(double t, bool centred_kinks) {
   const double g = options_.gravity;
   const StageSettings settings{options_.order == SpatialOrder::second,
                                options_.limiter == Limiter::van_leer, options_.limiter_theta,
-                               options_.dry_depth};
+                               options_.dry_depth, centred_kinks};
   double limit = std::numeric_limits<double>::infinity();
   // Interior faces of every reach first: the end faces need the primitives of neighbours.
   for (Reach& r : reaches_) {
@@ -336,8 +336,8 @@ int Canal::total_cells() const {
   return n;
 }
 
-void Canal::evaluate_rates(double t, std::vector<double>& rates) {
-  compute_fluxes(t);  // primitives, limited slopes, interior and end-face fluxes of every reach
+void Canal::evaluate_rates(double t, std::vector<double>& rates, LimiterKinks kinks) {
+  compute_fluxes(t, kinks == LimiterKinks::centred);  // primitives, limited slopes, interior and end-face fluxes of every reach
   const double g = options_.gravity;
   rates.assign(2 * static_cast<std::size_t>(total_cells()), 0.0);
   std::size_t c = 0;
@@ -365,6 +365,11 @@ void Canal::evaluate_rates(double t, std::vector<double>& rates) {
       rates[2 * c + 1] = dq;
     }
   }
+}
+
+double Canal::end_face_discharge(int ri, End end) const {
+  const Reach& r = reach(ri);
+  return r.face_mass_[end == End::upstream ? 0 : static_cast<std::size_t>(r.cells_)];
 }
 
 bool Canal::boundary_flux(int ri, End end, const InteriorState& cell, double t, Flux* out) const {

@@ -48,6 +48,12 @@ struct VolumeBalance {
 
 enum class Quantity { depth, level, area, discharge, velocity, froude };
 
+// How Canal::evaluate_rates treats the slope limiter where it is not differentiable.
+enum class LimiterKinks {
+  as_scheme,  // the scheme's own limiter (what a time step uses)
+  centred,    // the centred slope at kinks (solver/rates_jacobian.hpp, docs/linearization.md)
+};
+
 struct StepStatistics {
   long steps = 0;           // accepted steps
   long retries = 0;         // rejected and retried steps
@@ -99,7 +105,13 @@ class Canal {
   // every step, whatever dt). Layout: cells of all reaches in order, rates[2c] = dA/dt,
   // rates[2c + 1] = dQ/dt. Takes no step and advances no boundary state (used by the steady-state
   // solver, solver/steady_state.hpp).
-  void evaluate_rates(double t, std::vector<double>& rates);
+  // With LimiterKinks::centred the slope limiter takes the centred slope where it is not
+  // differentiable (StageSettings::centred_kinks): for the linearisation's Jacobian only.
+  void evaluate_rates(double t, std::vector<double>& rates, LimiterKinks kinks = LimiterKinks::as_scheme);
+  // The mass flux through an end face of a reach at the last flux evaluation (a step's stage or
+  // evaluate_rates) [m³/s], positive downstream; at a downstream end it includes an end-face
+  // withdrawal (Reach::fixed_end_withdrawal).
+  double end_face_discharge(int reach, End end) const;
   int total_cells() const;
   // The flux the boundary at `end` of `reach` returns at time t for an adjacent face state `cell`
   // (the steady-state solver's first guess asks it). False, and *out untouched, when that end is
@@ -117,7 +129,7 @@ class Canal {
     double stage_inflow = 0, stage_outflow = 0, stage_lateral = 0;  // weighted over a step
   };
 
-  double compute_fluxes(double t);  // all reaches, returns min over reaches of dx / max speed
+  double compute_fluxes(double t, bool centred_kinks = false);  // all reaches, returns min over reaches of dx / max speed
   Status apply_update(double dt, double alpha, double weight, bool final_stage, bool* reject);
   void save_start_state();
   void restore_start_state();

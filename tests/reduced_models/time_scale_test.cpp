@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <random>
 
+#include "reduced_models/frequency.hpp"
 #include "reduced_models/identification.hpp"
 #include "testing/synthetic.hpp"
 
@@ -151,6 +153,24 @@ TEST(CanalControlModels, IntegratorDelayZeroIsRecoveredFromItsClosedFormStepResp
 TEST(CanalControlModels, IdzNeverFitsWorseThanIdWhichItContains) {
   const auto data = prepare_data(fopdt_step_recording(StepTest{2.0, 60.0, 3.0, 0.125}));
   EXPECT_LE(fit(ModelKind::idz, data).iae_total, fit(ModelKind::id, data).iae_total * (1.0 + 1e-9));
+}
+
+// Their transfer functions: ID K e^{−Ls}/s (gain K/ω, phase −π/2 − ωL) and IDZ K (1/s + Tz) e^{−Ls}
+// (gain K √(1/ω² + Tz²), tending to the direct gain K·Tz at high frequency).
+TEST(CanalControlModels, FrequencyResponsesAreTheIntegratorsAndTheZeros) {
+  Model id{ModelKind::id, {}, {}};
+  id.p.K = 0.02;
+  id.p.L = 4.0;
+  const double omega = 0.3;
+  const auto g = frequency_response(id, OperatingPoint{}, omega);
+  EXPECT_NEAR(std::abs(g), 0.02 / omega, 1e-12);
+  EXPECT_NEAR(std::remainder(std::arg(g) - (-std::numbers::pi / 2.0 - omega * 4.0), 2.0 * std::numbers::pi), 0.0, 1e-12);
+  Model idz = id;
+  idz.kind = ModelKind::idz;
+  idz.p.Tz = 40.0;
+  EXPECT_NEAR(std::abs(frequency_response(idz, OperatingPoint{}, omega)),
+              0.02 * std::sqrt(1.0 / (omega * omega) + 1600.0), 1e-12);
+  EXPECT_NEAR(std::abs(frequency_response(idz, OperatingPoint{}, 1e4)), 0.02 * 40.0, 1e-4);
 }
 
 // Every pair of nested models on data none of them represents exactly (two lags in series, the
