@@ -10,6 +10,7 @@ void add_version_command(CLI::App& app);
 void add_dambreak_command(CLI::App& app);
 void add_prbs_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
+void add_resample_command(CLI::App& app);
 void add_scenarios_command(CLI::App& app);
 void add_simulate_command(CLI::App& app);
 void add_diagnose_command(CLI::App& app);

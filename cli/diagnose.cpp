@@ -117,7 +117,7 @@ void add_diagnose_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("diagnose", "Locate and explain the mismatch between a scenario and recordings");
   cmd->add_option("--scenario", args->scenario, "Built-in scenario name or TOML file");
   cmd->add_option("--model", args->model,
-                  "Diagnose a reduced model instead (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid)");
+                  "Diagnose a reduced model instead (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid, id, idz)");
   cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm already in the model (eq. 17)")
       ->check(number_in(0.0, 100.0, "a resolution in mm"));
   cmd->add_option("--gate-speed", args->gate_speed_mm_s, "--model: gate speed in mm/s already in the model (eq. 16)")

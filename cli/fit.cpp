@@ -6,6 +6,7 @@
 //   per recording : one fit each (on two threads), or with --gamma a γ sweep each (Figs. 8, 10)
 //   --nominal     : also one model for all recordings, minimising IAE_c (eq. 21), and the
 //                   uncertainty index Δp (eq. 22) of the per-recording parameters
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -41,6 +42,8 @@ struct FitArguments {
   std::string memory = "short";
   std::size_t memory_terms = 500;
   unsigned threads = 2;
+  std::string bounds;  // NAME=LO:HI,...
+  std::string start;   // NAME=V,...
   std::string freq_check;  // scenario the recordings were simulated from
 };
 
@@ -78,6 +81,8 @@ nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& d
   for (std::size_t i = 0; i < r.sources.size(); ++i) {
     const auto& d = data[which[i]];
     per.push_back({{"recording", r.sources[i]},
+                   {"K_declared_units", r.model.p.K * declared_gain_factor(d)},
+                   {"K_unit", declared_gain_unit(d) + (is_integrating(r.model.kind) ? "/s" : "")},
                    {"iae", r.iae[i]},
                    {"nrmse", r.nrmse[i]},
                    {"u0_mm", d.u0_mm},
@@ -90,22 +95,119 @@ nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& d
   return j;
 }
 
+// "NAME=TEXT,NAME=TEXT" of --bounds / --start, each NAME one of the model's parameters.
+std::vector<std::pair<std::string, std::string>> parse_assignments(const std::string& flag,
+                                                                   const std::string& text,
+                                                                   ModelKind kind,
+                                                                   const std::string& example) {
+  const auto names = parameter_names(kind);
+  std::string expected;
+  for (const auto& n : names) expected += (expected.empty() ? "" : ", ") + n;
+  std::vector<std::pair<std::string, std::string>> out;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, end - begin);
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw InputError(flag + " '" + item + "': expected NAME=" + example + " (comma-separated)");
+    }
+    const std::string name = item.substr(0, eq);
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      throw InputError(flag + " '" + item + "': " + model_name(kind) + " has no parameter " + name +
+                       " (expected " + expected + ")");
+    }
+    for (const auto& [seen, value] : out) {
+      if (seen == name) throw InputError(flag + ": parameter " + name + " given twice");
+    }
+    out.emplace_back(name, item.substr(eq + 1));
+    begin = end + 1;
+  }
+  return out;
+}
+
+double assignment_number(const std::string& flag, const std::string& name, const std::string& text) {
+  double value = 0.0;
+  if (!detail::parse_number(text, value)) {
+    throw InputError(flag + " " + name + "=" + text + ": '" + text + "' is not a finite number");
+  }
+  return value;
+}
+
+// --bounds NAME=LO:HI,... and --start NAME=V,... into the fit options; the options' own
+// validation then reports a start outside its bounds or bounds that exclude every model.
+void apply_bounds_and_start(const FitArguments& args, ModelKind kind, FitBounds& bounds) {
+  if (!args.bounds.empty()) {
+    for (const auto& [name, text] : parse_assignments("--bounds", args.bounds, kind, "LO:HI")) {
+      const auto colon = text.find(':');
+      if (colon == std::string::npos) {
+        throw InputError("--bounds " + name + "=" + text + ": expected LO:HI, e.g. " + name + "=0:5");
+      }
+      auto& spec = bounds[name];
+      spec.lower = assignment_number("--bounds", name, text.substr(0, colon));
+      spec.upper = assignment_number("--bounds", name, text.substr(colon + 1));
+      if (spec.lower > spec.upper) {
+        throw InputError("--bounds " + name + "=" + text + ": lower bound above upper bound");
+      }
+    }
+  }
+  if (!args.start.empty()) {
+    for (const auto& [name, text] : parse_assignments("--start", args.start, kind, "V")) {
+      bounds[name].initial = assignment_number("--start", name, text);
+    }
+  }
+}
+
+// The unit K is shown in: the recordings' declared units (docs/recording-format.md).
+std::string gain_unit_text(ModelKind kind, const std::vector<ExperimentData>& data) {
+  const std::string per_second = is_integrating(kind) ? "/s" : "";
+  const std::string unit = declared_gain_unit(data.front());
+  for (const auto& d : data) {
+    if (declared_gain_unit(d) != unit || declared_gain_factor(d) != declared_gain_factor(data.front())) {
+      return "K in each recording's declared units" + per_second;
+    }
+  }
+  return "K in " + unit + per_second;
+}
+
+// Table labels: the recordings' file names, or their whole paths where two share a file name.
+std::vector<std::string> recording_labels(const std::vector<std::string>& sources) {
+  std::vector<std::string> labels;
+  for (const auto& s : sources) labels.push_back(basename_of(s));
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (std::count(labels.begin(), labels.end(), labels[i]) > 1) {
+      for (std::size_t j = 0; j < labels.size(); ++j) {
+        if (basename_of(sources[j]) == basename_of(sources[i])) labels[j] = sources[j];
+      }
+    }
+  }
+  return labels;
+}
+
+// One row of a fit table: K is shown times `gain_factor`, i.e. in the recording's declared units.
+struct TableRow {
+  std::string label;
+  const FitResult* fit;
+  double gain_factor = 1.0;
+};
+
 void print_table(const std::string& title, const std::vector<std::string>& names,
-                 const std::vector<std::pair<std::string, const FitResult*>>& rows) {
+                 const std::vector<TableRow>& rows) {
   std::cout << title << "\n";
+  std::size_t width = std::string("recording").size();
+  for (const auto& row : rows) width = std::max(width, row.label.size());
   char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "  %-22s", "recording");
-  std::cout << buffer;
+  std::cout << "  " << "recording" << std::string(width - 9, ' ');
   for (const auto& n : names) {
     std::snprintf(buffer, sizeof buffer, " %10s", n.c_str());
     std::cout << buffer;
   }
   std::cout << "  " << std::string(10 - 3, ' ') << "IAE" << "     Nrmse\n";
-  for (const auto& [label, r] : rows) {
-    std::snprintf(buffer, sizeof buffer, "  %-22s", label.substr(0, 22).c_str());
-    std::cout << buffer;
+  for (const auto& [label, r, gain_factor] : rows) {
+    std::cout << "  " << label << std::string(width - label.size(), ' ');
     for (const auto& n : names) {
-      std::snprintf(buffer, sizeof buffer, " %10.4g", get_parameter(r->model.p, n));
+      const double value = get_parameter(r->model.p, n) * (n == "K" ? gain_factor : 1.0);
+      std::snprintf(buffer, sizeof buffer, " %10.4g", value);
       std::cout << buffer;
     }
     std::snprintf(buffer, sizeof buffer, "  %10.4g  %7.2f%%", r->iae.front(), r->nrmse.front());
@@ -158,7 +260,10 @@ void run_fit(const FitArguments& args) {
   options.simulation.gl.memory_terms = args.memory_terms;
   options.threads = args.threads;
   options.progress = progress.callback();
-  if (const auto why = options.validate(); !why.empty()) throw InputError(why);
+  apply_bounds_and_start(args, kind, options.bounds);
+  if (const auto why = options.validate(); !why.empty()) {
+    throw InputError((args.bounds.empty() && args.start.empty() ? "" : "--bounds/--start: ") + why);
+  }
 
   // Per-recording fits.
   std::vector<FitResult> fits;
@@ -186,15 +291,18 @@ void run_fit(const FitArguments& args) {
 
   // Table.
   const auto names = parameter_names(kind);
-  std::vector<std::pair<std::string, const FitResult*>> rows;
-  for (const auto& f : fits) rows.emplace_back(basename_of(f.sources.front()), &f);
-  print_table(model_name(kind) + " fits (IAE in mm s, Nrmse eq. 19" +
+  std::vector<TableRow> rows;
+  const auto labels = recording_labels(args.recordings);
+  for (std::size_t j = 0; j < fits.size(); ++j) {
+    rows.push_back({labels[j], &fits[j], declared_gain_factor(data[j])});
+  }
+  print_table(model_name(kind) + " fits (" + gain_unit_text(kind, data) + ", IAE in mm s, Nrmse eq. 19" +
                   (grid ? ", gamma by best Nrmse over " + args.gamma : std::string()) + ")",
               names, rows);
   std::map<std::string, double> dp;
   if (nominal) {
     std::vector<FitResult> per(nominal->sources.size());
-    std::vector<std::pair<std::string, const FitResult*>> nominal_rows;
+    std::vector<TableRow> nominal_rows;
     for (std::size_t j = 0; j < per.size(); ++j) {
       per[j].model = nominal->model;
       per[j].iae = {nominal->iae[j]};
@@ -203,7 +311,7 @@ void run_fit(const FitArguments& args) {
       per[j].message = nominal->message;
     }
     for (std::size_t j = 0; j < per.size(); ++j) {
-      nominal_rows.emplace_back("nominal @ " + basename_of(nominal->sources[j]), &per[j]);
+      nominal_rows.push_back({"nominal @ " + labels[j], &per[j], declared_gain_factor(data[j])});
     }
     print_table("nominal model (minimises IAE_c, eq. 21; IAE_c = " + fixed(nominal->iae_total, 4) +
                     ")",
@@ -257,7 +365,7 @@ void run_fit(const FitArguments& args) {
 void add_fit_command(CLI::App& app) {
   auto args = std::make_shared<FitArguments>();
   auto* cmd = app.add_subcommand(
-      "fit", "Fit a reduced model (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid) "
+      "fit", "Fit a reduced model (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid, id, idz) "
              "to recordings by minimising IAE");
   cmd->add_option("--model,-m", args->model, "Model to fit")->required();
   cmd->add_option("recordings", args->recordings, "Recording CSV files (t_s, u_mm, y_dwe_mm; "
@@ -283,6 +391,9 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--memory-terms", args->memory_terms, "N for the short memory (paper: 500)")
       ->capture_default_str()
       ->check(integer_in(1, 100000000, "a number of terms"));
+  cmd->add_option("--bounds", args->bounds,
+                  "Parameter bounds NAME=LO:HI,... (e.g. T=1:600,L=0:30; names as in the table)");
+  cmd->add_option("--start", args->start, "Starting values NAME=V,... (e.g. T=120,L=4)");
   cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(thread_count());
   cmd->add_option("--freq-check", args->freq_check,
                   "Scenario the recordings were simulated from: compare each fitted model's frequency response "

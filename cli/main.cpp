@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   canalsim::cli::add_dambreak_command(app);
   canalsim::cli::add_prbs_command(app);
   canalsim::cli::add_fit_command(app);
+  canalsim::cli::add_resample_command(app);
   canalsim::cli::add_reproduce_command(app);
   canalsim::cli::add_scenarios_command(app);
   canalsim::cli::add_simulate_command(app);

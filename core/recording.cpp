@@ -76,9 +76,12 @@ void check_time_axis(const Recording& rec, const std::vector<std::size_t>& row_l
                                          " then " + format_g(t[i], 10) + ")");
     }
     if (std::abs(step - dt) > tolerance * dt) {
+      const double mean_step = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
       fail(rec.source, row_lines[i],
            "t_s is not uniformly sampled (step " + format_g(step, 10) + " s, expected " +
-               format_g(dt, 10) + " s, within " + format_g(100.0 * tolerance, 10) + " %)");
+               format_g(dt, 10) + " s, within " + format_g(100.0 * tolerance, 10) +
+               " %); resample it first, e.g. canalsim resample " + rec.source + " -o uniform.csv --period " +
+               format_g(mean_step, 3));
     }
   }
 }

@@ -348,6 +348,9 @@ EffectResult upstream_level_variation(const ModelEngine& e) {
   }
   const double share = free_share(e.data());
   const auto nl = nonlinear_form(kind, share > 0.5);
+  if (!nl && reduced::is_integrating(kind)) {
+    return not_expressible(kUpstream, "model " + reduced::model_name(kind) + " has no upstream-level form");
+  }
   if (!nl) return not_expressible(kUpstream, "model " + reduced::model_name(kind) + " already uses y_up");
   Model m = e.fit_kind(*nl);
   const int extra = static_cast<int>(reduced::parameter_names(*nl).size() - reduced::parameter_names(kind).size());
@@ -358,6 +361,10 @@ EffectResult upstream_level_variation(const ModelEngine& e) {
 EffectResult flow_regime_switch(const ModelEngine& e) {
   const ModelKind kind = e.options().kind;
   if (kind == ModelKind::hybrid) return not_expressible(kRegime, "the hybrid model already switches");
+  if (reduced::is_integrating(kind)) {
+    return not_expressible(kRegime, "the switching (hybrid) model is a lag, not an integrator like " +
+                                        reduced::model_name(kind));
+  }
   for (const auto& d : e.data()) {
     if (!d.has_upstream_level()) return not_expressible(kRegime, d.source + " has no y_up_mm for conditions (8)/(10)");
   }

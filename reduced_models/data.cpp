@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 #include <sstream>
+#include <tuple>
 
 namespace canalsim::reduced {
 namespace {
@@ -21,7 +22,34 @@ std::optional<double> operating_point_mm(const Recording& recording) {
 }
 
 
+// The declared unit and scale of the command ("u") or the levels ("y"): (unit, mm per unit).
+std::pair<std::string, double> declared_unit(const Recording& recording, const std::string& source,
+                                             const std::string& which) {
+  const std::string unit_key = which + "_unit", scale_key = which + "_scale_mm_per_unit";
+  const std::string unit = recording.meta(unit_key), text = recording.meta(scale_key);
+  if (text.empty()) {
+    if (!unit.empty() && unit != "mm") {
+      throw InputError(source + ": metadata " + unit_key + ": " + unit + " needs " + scale_key +
+                       " (how many mm one " + unit + " is, e.g. # " + scale_key + ": 0.13)");
+    }
+    return {"mm", 1.0};
+  }
+  char* end = nullptr;
+  const double scale = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !std::isfinite(scale) || !(scale > 0.0)) {
+    throw InputError(source + ": metadata " + scale_key + ": '" + text +
+                     "', expected a positive number of mm per unit");
+  }
+  return {unit.empty() ? "unit" : unit, scale};
+}
+
 }  // namespace
+
+double declared_gain_factor(const ExperimentData& data) {
+  return data.u_scale_mm_per_unit / data.y_scale_mm_per_unit;
+}
+
+std::string declared_gain_unit(const ExperimentData& data) { return data.y_unit + "/" + data.u_unit; }
 
 std::string DataOptions::validate() const {
   if (upstream_level_mm && !(std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0)) {
@@ -55,6 +83,14 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
     d.y_up_is_constant_option = true;
   }
   if (recording.has(columns::gate_position)) d.x_up_mm = recording.column(columns::gate_position);
+  std::tie(d.u_unit, d.u_scale_mm_per_unit) = declared_unit(recording, source, "u");
+  std::tie(d.y_unit, d.y_scale_mm_per_unit) = declared_unit(recording, source, "y");
+  for (double& v : d.u_mm) v *= d.u_scale_mm_per_unit;
+  for (double& v : d.x_up_mm) v *= d.u_scale_mm_per_unit;
+  for (double& v : d.y_dwe_mm) v *= d.y_scale_mm_per_unit;
+  if (!d.y_up_is_constant_option) {
+    for (double& v : d.y_up_mm) v *= d.y_scale_mm_per_unit;
+  }
 
   const auto [umin, umax] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
   if (*umax - *umin <= options.min_excitation_mm) {
@@ -94,6 +130,29 @@ ExperimentData leading_samples(const ExperimentData& data, std::size_t n) {
   for (auto* v : {&out.t_s, &out.u_mm, &out.y_dwe_mm, &out.y_up_mm, &out.x_up_mm}) {
     if (v->size() > n) v->resize(n);
   }
+  return out;
+}
+
+ExperimentData block_average(const ExperimentData& data, std::size_t factor) {
+  if (factor <= 1) return data;
+  ExperimentData out = data;
+  const std::size_t blocks = std::max<std::size_t>(1, data.size() / factor);
+  const auto average = [&](const std::vector<double>& v) {
+    if (v.empty()) return v;
+    std::vector<double> a(blocks, 0.0);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t begin = b * factor, end = std::min(v.size(), begin + factor);
+      a[b] = std::accumulate(v.begin() + static_cast<long>(begin), v.begin() + static_cast<long>(end), 0.0) /
+             static_cast<double>(end - begin);
+    }
+    return a;
+  };
+  out.t_s = average(data.t_s);
+  out.u_mm = average(data.u_mm);
+  out.y_dwe_mm = average(data.y_dwe_mm);
+  out.y_up_mm = average(data.y_up_mm);
+  out.x_up_mm = average(data.x_up_mm);
+  out.h = data.h * static_cast<double>(factor);
   return out;
 }
 

@@ -1,8 +1,13 @@
 // Experiment data for the reduced models: a recording turned into the signals the models use,
 // with the operating point the paper's deviations (Δu, Δy_dwe) are taken from.
 //
-// Levels and gate openings stay in millimetres here, as in the recordings and the paper's
-// tables (gains are mm/mm, so nothing else depends on the unit); times are in seconds.
+// Levels and gate openings are in millimetres here, as in the paper's tables, so the flow-regime
+// conditions (8)/(10) compare millimetres; times are in seconds. A recording may hold its
+// command and its levels in other units and declare them in its metadata:
+//   # u_unit: counts                 # y_unit: cm
+//   # u_scale_mm_per_unit: 0.13      # y_scale_mm_per_unit: 10
+// u_mm and x_up_mm are then multiplied by the u scale, y_up_mm, y_dw_mm and y_dwe_mm by the y
+// scale; the units are kept so that gains can be reported in them (declared_gain_factor).
 #pragma once
 
 #include <optional>
@@ -39,6 +44,9 @@ struct ExperimentData {
   double u0_mm = 0.0;             // operating point of the input
   double y0_mm = 0.0;             // operating point of the output
   bool y_up_is_constant_option = false;
+  // Declared units of the recording's command and levels ("mm", scale 1, unless declared).
+  std::string u_unit = "mm", y_unit = "mm";
+  double u_scale_mm_per_unit = 1.0, y_scale_mm_per_unit = 1.0;
 
   std::size_t size() const { return u_mm.size(); }
   double duration() const { return h * static_cast<double>(size()); }
@@ -52,6 +60,17 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
 
 // The first `n` samples of an experiment (all of it when shorter), operating point unchanged.
 ExperimentData leading_samples(const ExperimentData& data, std::size_t n);
+
+// Block averages of `factor` consecutive samples (the last, partial block dropped unless it is the
+// only one): a copy at period factor·h that keeps the whole record's slow dynamics, for searches
+// that need not resolve every sample. Operating point unchanged.
+ExperimentData block_average(const ExperimentData& data, std::size_t factor);
+
+// A gain in mm/mm (or mm/(mm·s)) times this is the gain in the recording's declared units
+// (y_unit per u_unit): u_scale / y_scale.
+double declared_gain_factor(const ExperimentData& data);
+// "y_unit/u_unit", e.g. "mm/counts" ("mm/mm" without declarations).
+std::string declared_gain_unit(const ExperimentData& data);
 
 // Reads a recording and prepares it (the everyday entry point for files).
 ExperimentData load_experiment(const std::string& file, const DataOptions& options = {});

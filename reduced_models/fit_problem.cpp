@@ -13,7 +13,7 @@ bool output_linear_in_gain(ModelKind kind) {
 }
 
 ModelKind linear_counterpart(ModelKind kind) {
-  if (kind == ModelKind::sopd) return ModelKind::sopd;
+  if (kind == ModelKind::sopd || is_integrating(kind)) return kind;
   return is_fractional(kind) ? ModelKind::lfom : ModelKind::liom;
 }
 
@@ -75,7 +75,7 @@ double Problem::cost(Model& m) {
   const bool lti = is_linear_time_invariant(kind_);
   const std::vector<std::vector<double>>* undelayed_responses = nullptr;
   if (lti) {
-    const std::array<double, 3> key{m.p.T, m.p.lambda, m.p.T2};
+    const std::array<double, 4> key{m.p.T, m.p.lambda, m.p.T2, m.p.Tz};
     for (auto& entry : cache_) {
       if (entry.key == key) {
         entry.last_use = ++cache_clock_;
@@ -191,7 +191,7 @@ Model Problem::coarse_starts(const Model& start) {
 }
 
 Model Problem::refine(const Model& start, double& best_cost, bool& converged,
-                      std::string& message, double step_scale, int restarts) {
+                      std::string& message, double step_scale, int restarts, double bracket_s) {
   step_scale_ = step_scale;
   Model current = start;
   best_cost = kInf;
@@ -199,11 +199,14 @@ Model Problem::refine(const Model& start, double& best_cost, bool& converged,
   const double h0 = data_.front()->h;
   double L_lo = Lspec.lower, L_hi = Lspec.upper;
   auto set_bracket = [&](double L) {
-    L_lo = std::max(Lspec.lower, L - 2.0 * h0);
-    L_hi = std::min(Lspec.upper, L + 2.0 * h0);
+    const double half_width = bracket_s > 0.0 ? bracket_s : 2.0 * h0;
+    L_lo = std::max(Lspec.lower, L - half_width);
+    L_hi = std::min(Lspec.upper, L + half_width);
   };
   set_bracket(start.p.L);
-  const int configured = kind_ == ModelKind::hybrid ? options_.hybrid_restarts : options_.restarts;
+  const int configured = kind_ == ModelKind::hybrid     ? options_.hybrid_restarts
+                         : uses_gamma(kind_)            ? options_.nonlinear_restarts
+                                                        : options_.restarts;
   const int runs = 1 + std::max(0, restarts >= 0 ? restarts : configured);
   int recentre = 0;
   for (int run = 0; run < runs; ++run) {
@@ -260,7 +263,12 @@ Model Problem::run_nlopt(const Model& start, double L_lo, double L_hi, bool alte
     hi[i] = name == "L" ? L_hi : spec.upper;
     x[i] = std::clamp(get_parameter(start.p, name), lo[i], hi[i]);
     const double width = hi[i] - lo[i];
-    double s = name == "L" ? 0.5 * data_.front()->h : std::max(0.1 * std::abs(x[i]), 0.02 * width);
+    // L: a quarter of the bracket, at least half a sample (a slow pool's delay trades off against
+    // its time constant along a long valley that steps of a sample only crawl along).
+    // Others: a quarter of their value (relative: bounds from the data may span decades), or 2 %
+    // of the bounds' width for a parameter at 0.
+    double s = name == "L" ? std::max(0.5 * data_.front()->h, 0.125 * width)
+                           : (x[i] != 0.0 ? 0.25 * std::abs(x[i]) : 0.02 * width);
     if (name == "gamma" || name == "gamma_sub") s = 0.2;
     if (name == "lambda") s = 0.05;
     s = std::min(s * step_scale_, 0.5 * width);

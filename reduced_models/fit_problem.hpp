@@ -24,6 +24,9 @@ bool output_linear_in_gain(ModelKind kind);
 // The linear model whose delay search starts a fit of `kind` (LIOM, SOPD or LFOM).
 ModelKind linear_counterpart(ModelKind kind);
 std::vector<const ExperimentData*> pointers(const std::vector<ExperimentData>& data);
+// The parameter whose scale the delay trades off against and the delay search grids: "T", "Tz"
+// for IDZ, nullptr for ID.
+const char* dynamics_parameter(ModelKind kind);
 // Deviation of the recorded output from the operating point.
 std::vector<double> output_deviation(const ExperimentData& d);
 
@@ -41,8 +44,9 @@ class Problem {
   // Cost (IAE or IAE_c) of the model `m`; with K profiled, m.p.K is set to the optimal gain.
   double cost(Model& m);
 
-  // Delay grid (stage 1) for a linear model: returns the start with the best whole-sample shift.
-  Model delay_grid();
+  // Stage 1 for a linear model (delay_search.cpp): the cost profiled over every whole-sample
+  // delay on a grid of dynamics; returns the best (K, T, λ, T2, L) as the start of refine().
+  Model delay_search();
 
   // Coarse scans before the local refinement (the IAE is multimodal in γ, and for the hybrid in
   // the split of the gain between the regimes): alternately scans the exponents (γ, γ_sub) on a
@@ -50,11 +54,12 @@ class Problem {
   // best. About 30–60 cost evaluations.
   Model coarse_starts(const Model& start);
 
-  // Stage 2: NLopt from `start` with L bracketed around start.p.L. Returns the best model.
-  // `step_scale` scales NLopt's initial steps (1 = a fresh search, < 1 = polishing a good start);
-  // `restarts` < 0 takes the count from the options.
+  // Stage 2: NLopt from `start` with L bracketed within ±`bracket_s` of start.p.L (0: two
+  // samples; the bracket follows L when L ends on its edge). Returns the best model, never worse
+  // than `start`. `step_scale` scales NLopt's initial steps (1 = a fresh search, < 1 = polishing
+  // a good start); `restarts` < 0 takes the count from the options.
   Model refine(const Model& start, double& best_cost, bool& converged, std::string& message,
-               double step_scale = 1.0, int restarts = -1);
+               double step_scale = 1.0, int restarts = -1, double bracket_s = 0.0);
 
  private:
   Model run_nlopt(const Model& start, double L_lo, double L_hi, bool alternate, double& best_cost,
@@ -71,7 +76,7 @@ class Problem {
   int simulations_ = 0;  // model simulations (one per recording per evaluation, fewer if cached)
   double step_scale_ = 1.0;
   struct CacheEntry {
-    std::array<double, 3> key{};                  // (T, λ, T2)
+    std::array<double, 4> key{};                  // (T, λ, T2, Tz)
     std::vector<std::vector<double>> responses;   // undelayed unit responses per recording
     unsigned long last_use = 0;
   };

@@ -20,7 +20,9 @@ double linearised_gain(const Model& m, const OperatingPoint& op) {
   switch (m.kind) {
     case ModelKind::liom:
     case ModelKind::sopd:
-    case ModelKind::lfom: return p.K;
+    case ModelKind::lfom:
+    case ModelKind::id:
+    case ModelKind::idz: return p.K;  // ID, IDZ: mm/(mm·s), the integrator's gain
     case ModelKind::nliom_f:
     case ModelKind::nlfom_f: return p.K * head_factor(free_head, p.head_ref_mm, p.gamma);
     case ModelKind::nliom_s:
@@ -51,6 +53,8 @@ std::complex<double> frequency_response(const Model& m, const OperatingPoint& op
     case ModelKind::nlfom_f:
     case ModelKind::nlfom_s:
     case ModelKind::hybrid: return delayed_gain / fractional_lag(p.lambda);
+    case ModelKind::id: return delayed_gain / s;                     // K e^{−Ls} / s
+    case ModelKind::idz: return delayed_gain * (1.0 / s + p.Tz);     // K (1/s + Tz) e^{−Ls}
   }
   return {NAN, NAN};
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <map>
 #include <mutex>
 #include <utility>
 
@@ -54,27 +55,200 @@ namespace {
 
 using namespace detail;
 
-// Stages 1–3 of a fit: the delay grid and refinement of the linear counterpart, then (for a
-// nonlinear model) the coarse scans and refinement of the model itself.
-FitResult fit_from_linear_stage(ModelKind kind, const std::vector<const ExperimentData*>& data,
-                                const FitOptions& options) {
-  double cost = 0.0;
-  bool converged = true;
-  std::string message;
-  const ModelKind linear = linear_counterpart(kind);
-  Problem lin(linear, data, options);
-  const Model linear_fit = lin.refine(lin.delay_grid(), cost, converged, message);
-  int evaluations = lin.evaluations();
-  int simulations = lin.simulations();
-  Model best = linear_fit;
-  if (linear != kind) {
-    Problem nl(kind, data, options);
-    Model start = nl.base();
+// A model nested in another: the outer model equals the inner one when `parameter` = `value`
+// (LFOM at λ = 1 is LIOM; NLIOM at γ = 0 is LIOM; NLFOM at λ = 1 is NLIOM, at γ = 0 LFOM).
+struct Nesting {
+  ModelKind inner;
+  const char* parameter;
+  double value;
+};
+
+std::vector<Nesting> nested_models(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::lfom: return {{ModelKind::liom, "lambda", 1.0}};
+    case ModelKind::nliom_f:
+    case ModelKind::nliom_s: return {{ModelKind::liom, "gamma", 0.0}};
+    case ModelKind::nlfom_f: return {{ModelKind::nliom_f, "lambda", 1.0}, {ModelKind::lfom, "gamma", 0.0}};
+    case ModelKind::nlfom_s: return {{ModelKind::nliom_s, "lambda", 1.0}, {ModelKind::lfom, "gamma", 0.0}};
+    case ModelKind::idz: return {{ModelKind::id, "Tz", 0.0}};
+    default: return {};
+  }
+}
+
+// The nesting value lies in the parameter's bounds (or is its fixed value).
+bool nesting_allowed(const Nesting& n, const FitOptions& options) {
+  const auto& spec = options.bounds[n.parameter];
+  if (spec.fixed) return *spec.initial == n.value;
+  return spec.lower <= n.value && n.value <= spec.upper;
+}
+
+// Shortest run of samples over which the input holds (changes below 1 % of its range ignored),
+// not counting the runs at the ends of the record.
+std::size_t shortest_input_hold(const ExperimentData& d) {
+  const auto [lo, hi] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
+  const double threshold = 0.01 * (*hi - *lo);
+  std::size_t shortest = d.size(), run_start = 0;
+  bool first_run = true;
+  for (std::size_t k = 1; k < d.size(); ++k) {
+    if (std::abs(d.u_mm[k] - d.u_mm[k - 1]) <= threshold) continue;
+    if (!first_run) shortest = std::min(shortest, k - run_start);
+    first_run = false;
+    run_start = k;
+  }
+  return shortest;
+}
+
+// Upper bounds left at +∞ ("from the data") made concrete: T and T2 up to ten times the longest
+// recording, L up to half the shortest one.
+FitOptions resolve_bounds(FitOptions options, const std::vector<const ExperimentData*>& data) {
+  double longest = 0.0, shortest = kInf;
+  for (const auto* d : data) {
+    longest = std::max(longest, d->duration());
+    shortest = std::min(shortest, d->duration());
+  }
+  auto& b = options.bounds;
+  for (auto* spec : {&b.T, &b.T2, &b.Tz}) {
+    if (std::isinf(spec->upper)) spec->upper = std::max(spec->lower, 10.0 * longest);
+  }
+  if (std::isinf(b.L.upper)) b.L.upper = std::max(b.L.lower, 0.5 * shortest);
+  return options;
+}
+
+// One call of fit()/fit_nominal(): the recordings, a block-averaged copy of them for the searches
+// when they are long, and the fits of every model searched so far (a model's fit is reused by
+// the models that nest it).
+class FitSession {
+ public:
+  FitSession(const std::vector<const ExperimentData*>& data, const FitOptions& options)
+      : data_(data), options_(resolve_bounds(options, data)), search_options_(options_) {
+    std::size_t longest = 0;
+    for (const auto* d : data) longest = std::max(longest, d->size());
+    const std::size_t limit = options.search_samples;
+    if (limit == 0 || longest <= limit) {
+      search_data_ = data_;
+      return;
+    }
+    // The search runs on at most `search_samples` samples: block averages of `factor` samples
+    // (the GL memory keeps its length in seconds), as many as the input allows without blurring
+    // its fastest changes (a quarter of its shortest hold: a PRBS of 4-sample clock allows none,
+    // a step test any), taken from the start of the record. A slow pool excited by steps is searched
+    // over its whole record; a fast one driven by a PRBS on its leading part at full detail.
+    std::size_t hold = longest;
+    for (const auto* d : data) hold = std::min(hold, shortest_input_hold(*d));
+    const std::size_t factor = std::clamp<std::size_t>(hold / 4, 1, (longest + limit - 1) / limit);
+    for (const auto* d : data) {
+      search_copies_.push_back(block_average(leading_samples(*d, limit * factor), factor));
+    }
+    for (const auto& d : search_copies_) search_data_.push_back(&d);
+    // Bounds from the data: from the searched part (a leading segment's delay is at most half
+    // of it), unless the caller set them.
+    search_options_ = resolve_bounds(options, search_data_);
+    auto& gl = search_options_.simulation.gl;
+    gl.memory_terms = std::max<std::size_t>(1, gl.memory_terms / factor);
+    // The search's delay is known to about one coarse sample: the polish on the recordings
+    // brackets L within two of them.
+    polish_bracket_s_ = 2.0 * search_copies_.front().h;
+  }
+
+  // The fit of `kind` on the recordings: the search's model, polished on the recordings when
+  // the search ran on a copy, and never worse than a model it contains (below).
+  const FitResult& fit(ModelKind kind) {
+    if (const auto it = fits_.find(kind); it != fits_.end()) return it->second;
+    const Searched& searched = search(kind);
+    Model model = searched.model;
+    bool converged = searched.converged;
+    std::string message = searched.message;
+    if (!search_copies_.empty()) {
+      Problem whole(kind, data_, options_);
+      double cost = 0.0;
+      // Integer-order models simulate in O(n): their polish is one full-tolerance run with full
+      // steps, which the flat valley between T and L of a slow, finely sampled pool needs (a
+      // clean T = 60 s, L = 1.5 s step at 128 Hz: L 1.574 s with the short run, 1.530 s with
+      // this); a fractional model's (O(nN) per evaluation) is one short local run.
+      const bool cheap = !is_fractional(kind);
+      model = whole.refine(model, cost, converged, message, cheap ? 1.0 : 0.1, 0,
+                           polish_bracket_s_);
+      count(whole);
+    }
+    FitResult r = result(model, converged, message);
+    // A model that contains another must not fit worse than it: the inner model's fit, written
+    // as this model (λ = 1, γ = 0), is the same response, and replaces the fit if it is better.
+    for (const auto& nesting : nested_models(kind)) {
+      if (!nesting_allowed(nesting, options_)) continue;
+      const FitResult& inner = fit(nesting.inner);
+      FitResult embedded = result(embed(kind, inner.model, nesting, data_, options_), inner.converged,
+                                  inner.message);
+      if (embedded.iae_total < r.iae_total) r = std::move(embedded);
+    }
+    return fits_.emplace(kind, std::move(r)).first->second;
+  }
+
+  int evaluations() const { return evaluations_; }
+  int simulations() const { return simulations_; }
+
+ private:
+  struct Searched {
+    Model model;
+    double cost = kInf;
+    bool converged = true;
+    std::string message;
+  };
+
+  // Stages 1–3 on the search data: the delay search and refinement of a linear model, or the
+  // coarse scans and refinement of a nonlinear one from its linear counterpart; then, for each
+  // model this one contains, a refinement started from that model's optimum (λ = 1, γ = 0),
+  // kept when it is better.
+  const Searched& search(ModelKind kind) {
+    if (const auto it = searched_.find(kind); it != searched_.end()) return it->second;
+    Searched best;
+    Problem problem(kind, search_data_, search_options_);
+    const ModelKind linear = linear_counterpart(kind);
+    if (linear == kind) {
+      // The delay that goes with the searched time constant is known to about 0.4 × the 4 %
+      // step of the fine T pass: a bracket of ±T/10 (at least two samples) holds it.
+      const Model start = problem.delay_search();
+      const char* scale = dynamics_parameter(kind);
+      const double T = scale ? get_parameter(start.p, scale) : 0.0;
+      best.model = problem.refine(start, best.cost, best.converged, best.message, 1.0, -1,
+                                  std::max(0.1 * T, 2.0 * search_data_.front()->h));
+    } else {
+      const Model start = nonlinear_start(problem, search(linear).model);
+      best.model = problem.refine(problem.coarse_starts(start), best.cost, best.converged, best.message);
+    }
+    for (const auto& nesting : nested_models(kind)) {
+      if (!nesting_allowed(nesting, options_)) continue;
+      const Model start = embed(kind, search(nesting.inner).model, nesting, search_data_, search_options_);
+      Searched candidate;
+      candidate.model = problem.refine(start, candidate.cost, candidate.converged, candidate.message, 0.3, 0);
+      if (candidate.cost < best.cost) best = std::move(candidate);
+    }
+    count(problem);
+    return searched_.emplace(kind, std::move(best)).first->second;
+  }
+
+  // The inner model's parameters written as the outer model `kind` (head references of `kind`).
+  static Model embed(ModelKind kind, const Model& inner, const Nesting& nesting,
+                     const std::vector<const ExperimentData*>& data, const FitOptions& options) {
+    Model m{kind, {}, options.actuation};
+    m.p.head_ref_mm = options.head_ref_mm;
+    m.p.head_ref_sub_mm = options.head_ref_sub_mm;
+    set_head_references(m, data);
+    for (const auto& name : parameter_names(nesting.inner)) {
+      set_parameter(m.p, name, get_parameter(inner.p, name));
+    }
+    set_parameter(m.p, nesting.parameter, nesting.value);
+    return m;
+  }
+
+  // Start of a nonlinear model from its linear counterpart's fit (the head term is normalised by
+  // the mean head, so K starts at the linear gain; γ at 0.5 unless given).
+  Model nonlinear_start(Problem& problem, const Model& linear_fit) const {
+    Model start = problem.base();
     start.p.T = linear_fit.p.T;
     start.p.lambda = linear_fit.p.lambda;
     start.p.L = linear_fit.p.L;
-    for (const auto& name : nl.free_names()) {
-      const auto& spec = options.bounds[name];
+    for (const auto& name : problem.free_names()) {
+      const auto& spec = options_.bounds[name];
       double value = get_parameter(start.p, name);
       if (name == "K" || name == "K_sub") value = spec.initial.value_or(linear_fit.p.K);
       if (name == "gamma" || name == "gamma_sub") value = spec.initial.value_or(0.5);
@@ -83,80 +257,44 @@ FitResult fit_from_linear_stage(ModelKind kind, const std::vector<const Experime
       }
       set_parameter(start.p, name, std::clamp(value, spec.lower, spec.upper));
     }
-    best = nl.refine(nl.coarse_starts(start), cost, converged, message);
-    evaluations += nl.evaluations();
-    simulations += nl.simulations();
+    return start;
   }
-  FitResult r = finish(best, data, options.simulation);
-  r.evaluations = evaluations;
-  r.simulations = simulations;
-  r.converged = converged;
-  r.message = message;
-  return r;
-}
 
-// Stages 1–3, and for a fractional model (LFOM, NLFOM-S/F) a second search: the model contains
-// itself at λ = 1, where it is a first-order lag, so it is also fitted with λ fixed at 1 and
-// refined from there with λ free; the better search is kept. The IAE is multimodal in λ (a
-// quantised output makes it piecewise flat), and a search started from the linear fit alone can
-// settle at a λ < 1 that fits worse than λ = 1 — a nested model must not fit worse than the model
-// it contains.
-FitResult fit_searching(ModelKind kind, const std::vector<const ExperimentData*>& data,
-                        const FitOptions& options) {
-  FitResult best = fit_from_linear_stage(kind, data, options);
-  const auto& lambda = options.bounds.lambda;
-  const bool nests_lambda_one = is_fractional(kind) && kind != ModelKind::hybrid && !lambda.fixed &&
-                                lambda.lower <= 1.0 && 1.0 <= lambda.upper;
-  if (!nests_lambda_one) return best;
-  FitOptions at_one_options = options;
-  at_one_options.bounds.lambda = {lambda.lower, lambda.upper, 1.0, true};
-  const FitResult at_one = fit_from_linear_stage(kind, data, at_one_options);
-  Problem problem(kind, data, options);
-  Model current = best.model;
-  const double current_cost = problem.cost(current);
-  double cost = 0.0;
-  bool converged = true;
-  std::string message;
-  const Model refined = problem.refine(at_one.model, cost, converged, message, 0.3, 0);
-  const int evaluations = best.evaluations + at_one.evaluations + problem.evaluations();
-  const int simulations = best.simulations + at_one.simulations + problem.simulations();
-  if (cost < current_cost) {
-    best = finish(refined, data, options.simulation);
-    best.converged = converged;
-    best.message = message;
+  FitResult result(const Model& model, bool converged, const std::string& message) const {
+    FitResult r = finish(model, data_, options_.simulation);
+    r.converged = converged;
+    r.message = message;
+    return r;
   }
-  best.evaluations = evaluations;
-  best.simulations = simulations;
-  return best;
-}
 
-// A fit. Long records are searched on their leading `coarse_samples` samples; the whole record
-// then only polishes that fit (one short local run).
+  void count(const Problem& problem) {
+    evaluations_ += problem.evaluations();
+    simulations_ += problem.simulations();
+  }
+
+  std::vector<const ExperimentData*> data_;
+  FitOptions options_;
+  FitOptions search_options_;
+  std::vector<ExperimentData> search_copies_;
+  std::vector<const ExperimentData*> search_data_;
+  double polish_bracket_s_ = 0.0;
+  std::map<ModelKind, Searched> searched_;  // on the search data
+  std::map<ModelKind, FitResult> fits_;     // on the recordings
+  int evaluations_ = 0;
+  int simulations_ = 0;
+};
+
 FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& data,
                    const FitOptions& options) {
   check_data_for_fit(kind, data, options);
-  std::size_t longest = 0;
-  for (const auto* d : data) longest = std::max(longest, d->size());
-  if (options.coarse_samples == 0 || longest <= 2 * options.coarse_samples) {
-    return fit_searching(kind, data, options);
-  }
-  std::vector<ExperimentData> heads;
-  for (const auto* d : data) heads.push_back(leading_samples(*d, options.coarse_samples));
-  const FitResult head_fit = fit_searching(kind, pointers(heads), options);
-  Problem whole(kind, data, options);
-  double cost = 0.0;
-  bool converged = true;
-  std::string message;
-  const Model polished = whole.refine(head_fit.model, cost, converged, message, 0.1, 0);
-  FitResult r = finish(polished, data, options.simulation);
-  r.evaluations = head_fit.evaluations + whole.evaluations();
-  r.simulations = head_fit.simulations + whole.simulations();
-  r.converged = converged;
-  r.message = message;
+  FitSession session(data, options);
+  FitResult r = session.fit(kind);
+  r.evaluations = session.evaluations();
+  r.simulations = session.simulations();
   return r;
 }
 
-const char* const kNames[] = {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub"};
+const char* const kNames[] = {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz"};
 
 }  // namespace
 
@@ -174,6 +312,7 @@ const ParameterSpec& FitBounds::operator[](const std::string& name) const {
   if (name == "L") return L;
   if (name == "K_sub") return K_sub;
   if (name == "gamma_sub") return gamma_sub;
+  if (name == "Tz") return Tz;
   throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
@@ -181,7 +320,9 @@ std::string FitOptions::validate() const {
   for (const char* name : kNames) {
     const auto& s = bounds[name];
     const std::string field = std::string("bounds.") + name;
-    if (!std::isfinite(s.lower) || !std::isfinite(s.upper)) {
+    const std::string n = name;
+    const bool upper_from_data = s.upper == kInf && (n == "T" || n == "T2" || n == "Tz" || n == "L");
+    if (!std::isfinite(s.lower) || (!std::isfinite(s.upper) && !upper_from_data)) {
       return field + ": bounds must be finite (got [" + format_g(s.lower) + ", " + format_g(s.upper) + "])";
     }
     if (s.lower > s.upper) {
@@ -202,11 +343,13 @@ std::string FitOptions::validate() const {
   }
   if (bounds.T.lower < 0.0) return "bounds.T: lower " + format_g(bounds.T.lower) + " s, expected >= 0";
   if (bounds.T2.lower < 0.0) return "bounds.T2: lower " + format_g(bounds.T2.lower) + " s, expected >= 0";
+  if (bounds.Tz.lower < 0.0) return "bounds.Tz: lower " + format_g(bounds.Tz.lower) + " s, expected >= 0";
   if (bounds.L.lower < 0.0) return "bounds.L: lower " + format_g(bounds.L.lower) + " s, expected >= 0";
   if (bounds.lambda.lower <= 0.0) return "bounds.lambda: lower " + format_g(bounds.lambda.lower) + ", expected > 0";
   if (!(relative_tolerance > 0.0)) return "relative_tolerance: expected > 0";
   if (max_evaluations < 1) return "max_evaluations: expected >= 1";
   if (restarts < 0) return "restarts: expected >= 0";
+  if (nonlinear_restarts < 0) return "nonlinear_restarts: expected >= 0";
   if (hybrid_restarts < 0) return "hybrid_restarts: expected >= 0";
   if (threads < 1) return "threads: expected >= 1";
   if (!(head_ref_mm >= 0.0)) return "head_ref_mm: expected >= 0 (0 = mean head of the data)";
@@ -288,8 +431,9 @@ std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData
 namespace detail {
 
 FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*>& ptrs,
-                     const FitOptions& options, double step_scale, int restarts) {
-  check_data_for_fit(start.kind, ptrs, options);
+                     const FitOptions& given_options, double step_scale, int restarts) {
+  check_data_for_fit(start.kind, ptrs, given_options);
+  const FitOptions options = resolve_bounds(given_options, ptrs);
   Problem problem(start.kind, ptrs, options);
   Model s = problem.base();
   for (const auto& name : problem.free_names()) {

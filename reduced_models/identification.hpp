@@ -2,23 +2,26 @@
 // (eq. 21) for a nominal model over several recordings — under bounds with NLopt's
 // derivative-free bounded optimisers.
 //
-// Method (per fit):
-//  1. Delay grid. The delay enters through a sampled shift, so the cost is flat in L between
-//     samples and a gradient says nothing. The linear counterpart of the model (LIOM for the
-//     integer models, SOPD for SOPD, LFOM for the fractional ones) is simulated once per start
-//     from a small grid of (T, λ); for every whole-sample shift inside the L bounds the gain is
-//     set by least squares and the IAE computed (O(n) per shift). The best shift brackets L.
-//  2. Refinement. NLopt (BOBYQA by default) minimises the IAE over all free parameters with L
-//     continuous (fractional samples by linear interpolation) inside ±2 samples of the grid
-//     optimum; the bracket is re-centred when L ends on its edge. For the linear models K is
-//     profiled out exactly: for given (T, λ, L) the IAE-optimal gain is the weighted median of
-//     y_i/g_i with weights |g_i| (g = unit-gain response), clipped to the K bounds.
-//  3. Nonlinear models start from the linear fit (their head term is normalised by the mean
-//     head, so K starts at the linear gain) and refine all their parameters.
+// Method (per fit; docs/reduced-models.md, "Identification"):
+//  1. Delay search (delay_search.cpp). The cost of the linear counterpart (LIOM for the integer
+//     models, SOPD, LFOM for the fractional ones, ID, IDZ) is profiled over every whole-sample
+//     delay inside the L bounds for time constants on a grid spanning a quarter sample to three
+//     record lengths (K by least squares at each delay; all delays at once by FFT correlation).
+//  2. Refinement (fit_problem.cpp). NLopt (BOBYQA by default, restarts alternating with SBPLX)
+//     minimises the IAE over all free parameters with L continuous (fractional samples by linear
+//     interpolation) inside ±max(T/10, 2 samples) of the search's delay, re-centred when L ends on
+//     its edge. For the models linear in K it is profiled out exactly: the IAE-optimal gain is the
+//     weighted median of y_i/g_i with weights |g_i| (g = unit-gain response), clipped to its bounds.
+//  3. Nonlinear models start from their linear counterpart's fit (their head term is normalised
+//     by the mean head, so K starts at the linear gain) and refine all their parameters.
+//  4. A model that contains another (LFOM ⊃ LIOM, NLIOM ⊃ LIOM, NLFOM ⊃ NLIOM and LFOM, IDZ ⊃ ID)
+//     is also refined from that model's optimum and never fits worse than it.
+//  Long records are searched on at most `search_samples` (block-averaged) samples, then polished.
 // γ is fitted like any parameter unless fixed; gamma_sweep() instead fixes γ on a grid and picks
 // the γ with the best Nrmse (eq. 19), as in the paper's Figures 8 and 10.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -40,14 +43,19 @@ struct ParameterSpec {
 };
 
 struct FitBounds {
+  static constexpr double kFromData = std::numeric_limits<double>::infinity();
+
   ParameterSpec K{-100.0, 100.0, std::nullopt, false};       // mm/mm
-  ParameterSpec T{0.01, 60.0, std::nullopt, false};          // s
-  ParameterSpec T2{0.0, 60.0, std::nullopt, false};          // s (SOPD)
+  // Upper bounds of T, T2, Tz and L may be +∞: "from the data", ten times the longest recording
+  // for T, T2 and Tz, half the shortest for L (the defaults). ID and IDZ have K in mm/(mm·s).
+  ParameterSpec T{0.01, kFromData, std::nullopt, false};     // s
+  ParameterSpec T2{0.0, kFromData, std::nullopt, false};     // s (SOPD)
   ParameterSpec lambda{0.1, 1.5, std::nullopt, false};       // fractional order
   ParameterSpec gamma{0.0, 10.0, std::nullopt, false};       // flow-law exponent (paper's search range)
-  ParameterSpec L{0.0, 20.0, std::nullopt, false};           // delay, s
+  ParameterSpec L{0.0, kFromData, std::nullopt, false};      // delay, s
   ParameterSpec K_sub{-100.0, 100.0, std::nullopt, false};   // hybrid, mm/mm
   ParameterSpec gamma_sub{0.0, 10.0, std::nullopt, false};   // hybrid
+  ParameterSpec Tz{0.0, kFromData, std::nullopt, false};     // IDZ zero, s
 
   ParameterSpec& operator[](const std::string& name);
   const ParameterSpec& operator[](const std::string& name) const;
@@ -64,11 +72,17 @@ struct FitOptions {
   Optimizer optimizer = Optimizer::bobyqa;
   double relative_tolerance = 1e-4;  // NLopt xtol_rel and ftol_rel
   int max_evaluations = 2000;        // per NLopt run
-  int restarts = 1;                  // NLopt reruns from the best point found
+  // NLopt reruns from the best point found, alternating BOBYQA and SBPLX: the IAE of a quantised
+  // output is rough, and one optimiser stalls where the other walks on. The nonlinear models
+  // (NLIOM/NLFOM-S/F) need more: an NLIOM-F fit of issue 14 stopped at γ 2.73, IAE 8.9 mm·s,
+  // after one restart and reached γ 3.01, IAE 5.4, after two; an NLFOM-F fit needed three.
+  int restarts = 1;
+  int nonlinear_restarts = 3;
   int hybrid_restarts = 5;           // the same for the hybrid model (its cost is rougher)
-  // Records longer than twice this are first fitted on their leading `coarse_samples` samples
-  // (delay grid and search), then polished on the whole record; 0 = always the whole record.
-  std::size_t coarse_samples = 2048;
+  // Records longer than this are searched (stages 1–3) on at most this many samples — block
+  // averages as coarse as the input's fastest changes allow, from the start of the record — then
+  // polished on the whole record; 0 = always search the whole record.
+  std::size_t search_samples = 2048;
   // Head references H of the nonlinear models (mm); 0 = mean head of the fitted data.
   double head_ref_mm = 0.0;
   double head_ref_sub_mm = 0.0;

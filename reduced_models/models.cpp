@@ -45,13 +45,16 @@ std::string model_name(ModelKind kind) {
     case ModelKind::nliom_s: return "nliom-s";
     case ModelKind::nlfom_s: return "nlfom-s";
     case ModelKind::hybrid: return "hybrid";
+    case ModelKind::id: return "id";
+    case ModelKind::idz: return "idz";
   }
   return "?";
 }
 
 std::vector<ModelKind> all_model_kinds() {
   return {ModelKind::liom,    ModelKind::sopd,    ModelKind::lfom,    ModelKind::nliom_f,
-          ModelKind::nlfom_f, ModelKind::nliom_s, ModelKind::nlfom_s, ModelKind::hybrid};
+          ModelKind::nlfom_f, ModelKind::nliom_s, ModelKind::nlfom_s, ModelKind::hybrid,
+          ModelKind::id,      ModelKind::idz};
 }
 
 std::optional<ModelKind> parse_model_kind(const std::string& name) {
@@ -77,8 +80,10 @@ bool is_fractional(ModelKind kind) {
          kind == ModelKind::hybrid;
 }
 bool uses_upstream_level(ModelKind kind) {
-  return !(kind == ModelKind::liom || kind == ModelKind::sopd || kind == ModelKind::lfom);
+  return !(kind == ModelKind::liom || kind == ModelKind::sopd || kind == ModelKind::lfom ||
+           is_integrating(kind));
 }
+bool is_integrating(ModelKind kind) { return kind == ModelKind::id || kind == ModelKind::idz; }
 bool uses_gamma(ModelKind kind) { return uses_upstream_level(kind); }
 bool is_linear_time_invariant(ModelKind kind) { return !uses_upstream_level(kind); }
 
@@ -102,6 +107,8 @@ std::vector<std::string> parameter_names(ModelKind kind) {
     case ModelKind::nlfom_f:
     case ModelKind::nlfom_s: return {"K", "T", "lambda", "gamma", "L"};
     case ModelKind::hybrid: return {"K", "T", "lambda", "gamma", "L", "K_sub", "gamma_sub"};
+    case ModelKind::id: return {"K", "L"};
+    case ModelKind::idz: return {"K", "Tz", "L"};
   }
   return {};
 }
@@ -115,6 +122,7 @@ double get_parameter(const ModelParameters& p, const std::string& name) {
   if (name == "L") return p.L;
   if (name == "K_sub") return p.K_sub;
   if (name == "gamma_sub") return p.gamma_sub;
+  if (name == "Tz") return p.Tz;
   throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
@@ -127,6 +135,7 @@ void set_parameter(ModelParameters& p, const std::string& name, double value) {
   else if (name == "L") p.L = value;
   else if (name == "K_sub") p.K_sub = value;
   else if (name == "gamma_sub") p.gamma_sub = value;
+  else if (name == "Tz") p.Tz = value;
   else throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
@@ -143,6 +152,9 @@ std::string validate(const Model& model) {
     return "parameter lambda: " + format_g(p.lambda) + ", expected > 0";
   }
   if (!(p.L >= 0.0)) return "parameter L: " + format_g(p.L) + " s, expected >= 0";
+  if (model.kind == ModelKind::idz && !(p.Tz >= 0.0)) {
+    return "parameter Tz: " + format_g(p.Tz) + " s, expected >= 0";
+  }
   if (!(p.head_ref_mm >= 0.0)) return "parameter head_ref_mm: expected >= 0 (0 = from data)";
   if (!(p.head_ref_sub_mm >= 0.0)) return "parameter head_ref_sub_mm: expected >= 0";
   return model.actuation.validate();
@@ -276,6 +288,19 @@ SimulationResult simulate(const Model& model_in, const ExperimentData& data,
         return p.K * std::pow(head / p.head_ref_mm, p.gamma) * dud[k];
       };
       solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
+      break;
+    }
+    case ModelKind::id:
+    case ModelKind::idz: {
+      // Rectangle rule on the held input: exact for a command held between samples (a delayed
+      // step gives the sampled ramp K A (t − t_step − L) exactly, for any fractional L). IDZ adds
+      // the direct gain K·Tz of its zero (ID: Tz = 0).
+      const double Tz = kind == ModelKind::idz ? p.Tz : 0.0;
+      double integral = 0.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (k > 0) integral += h * dud[k - 1];
+        x[k] = p.K * (integral + Tz * dud[k]);
+      }
       break;
     }
     case ModelKind::hybrid: {

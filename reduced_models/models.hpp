@@ -8,6 +8,11 @@
 //   NLFOM-F (eq. 13)    T D^λ Δy + Δy = K (y_up(t)/H)^γ Δu(t − L)
 //   NLIOM-S (eq. 14)    T D Δy + Δy = K ((y_up(t) − y_dwe(t))/H)^γ Δu(t − L)
 //   NLFOM-S (eq. 15)    T D^λ Δy + Δy = K ((y_up(t) − y_dwe(t))/H)^γ Δu(t − L)
+//   ID                  dΔy/dt = K Δu(t − L)            integrator plus delay (Schuurmans et
+//                                                        al. 1999); K in mm/(mm·s)
+//   IDZ                 Δy = K (1/s + Tz) e^{−Ls} Δu     integrator-delay-zero (Litrico &
+//                                                        Fromion 2004): the integrator plus the
+//                                                        direct (high-frequency) gain K·Tz
 //   hybrid              T D^λ Δy + Δy = g(t) Δu(t − L), where g is the free-flow term
 //                       K (y_up/H)^γ while condition (8) holds and the submerged term
 //                       K_sub ((y_up − y_dwe)/H_sub)^γ_sub under condition (10).
@@ -34,9 +39,9 @@
 
 namespace canalsim::reduced {
 
-enum class ModelKind { liom, sopd, lfom, nliom_f, nlfom_f, nliom_s, nlfom_s, hybrid };
+enum class ModelKind { liom, sopd, lfom, nliom_f, nlfom_f, nliom_s, nlfom_s, hybrid, id, idz };
 
-// "liom", "sopd", "lfom", "nliom-f", "nlfom-f", "nliom-s", "nlfom-s", "hybrid".
+// "liom", "sopd", "lfom", "nliom-f", "nlfom-f", "nliom-s", "nlfom-s", "hybrid", "id", "idz".
 std::string model_name(ModelKind kind);
 // Parses a model name (case-insensitive, '_' accepted for '-'); nullopt when unknown.
 std::optional<ModelKind> parse_model_kind(const std::string& name);
@@ -47,7 +52,8 @@ ModelKind require_model_kind(const std::string& name, const std::string& option 
 bool is_fractional(ModelKind kind);     // λ is a parameter (lfom, nlfom-*, hybrid)
 bool uses_upstream_level(ModelKind kind);  // nonlinear models need y_up
 bool uses_gamma(ModelKind kind);        // γ is a parameter
-bool is_linear_time_invariant(ModelKind kind);  // liom, sopd, lfom
+bool is_linear_time_invariant(ModelKind kind);  // liom, sopd, lfom, id, idz
+bool is_integrating(ModelKind kind);    // id, idz: no time constant, K in mm/(mm·s)
 
 // Model parameters; fields a model does not use keep their defaults and are ignored.
 struct ModelParameters {
@@ -59,6 +65,7 @@ struct ModelParameters {
   double L = 0.0;          // delay, s (any real value ≥ 0: fractional samples interpolated)
   double K_sub = 1.0;      // hybrid: submerged-flow gain
   double gamma_sub = 0.5;  // hybrid: submerged-flow exponent
+  double Tz = 0.0;         // IDZ: zero time constant, s (direct gain K·Tz, mm/mm)
   double head_ref_mm = 0.0;      // H of the free-flow (or only) head term; 0 = from the data
   double head_ref_sub_mm = 0.0;  // H of the hybrid's submerged head term; 0 = from the data
 };
@@ -78,7 +85,7 @@ struct Model {
 
 // Names of the parameters of a model in a fixed order, e.g. {"K","T","lambda","L"} for LFOM.
 std::vector<std::string> parameter_names(ModelKind kind);
-// Access by name ("K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub").
+// Access by name ("K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz").
 double get_parameter(const ModelParameters& p, const std::string& name);
 void set_parameter(ModelParameters& p, const std::string& name, double value);
 

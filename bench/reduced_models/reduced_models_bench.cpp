@@ -1,5 +1,6 @@
 // Speed of the reduced-model module: one LFOM fit with the delay search on 20,000 samples
-// (target ≤ 0.1 s), and the cost of GL simulation with short memory (N = 500), full memory by
+// (target ≤ 0.1 s), one LIOM fit of a slow pool's step test on 10⁶ samples (target ≤ 1 s), and
+// the cost of GL simulation with short memory (N = 500), full memory by
 // FFT divide and conquer, and full memory by direct summation, against n.
 #include <benchmark/benchmark.h>
 
@@ -43,6 +44,54 @@ void BM_LfomFitWithDelaySearch(benchmark::State& state) {
 }
 BENCHMARK(BM_LfomFitWithDelaySearch)->Arg(2044)->Arg(20000)->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// A slow pool (T = 1 h, L = 5 min) under a gate step every 4 h, 10⁶ samples of 0.125 s (35 h), in
+// closed form: y = y0 + Σ_j K ΔA_j (1 − e^{−(t − t_j − L)/T}), noise 0.03 mm, 0.1 mm resolution.
+ExperimentData slow_pool_step_test(std::size_t n) {
+  const double h = 0.125, K = 1.7, T = 3600.0, L = 300.0, every = 4.0 * 3600.0;
+  std::mt19937 rng(1);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  canalsim::Recording rec;
+  rec.source = "slow_pool.csv";
+  std::vector<double> t(n), u(n), y(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    t[k] = h * static_cast<double>(k);
+    const auto step = static_cast<long>(t[k] / every);
+    u[k] = 20.0 + ((step % 2 == 1) ? 5.0 : 0.0);
+    double level = 45.0;
+    for (long j = 1; j <= step + 1; ++j) {
+      const double since = t[k] - static_cast<double>(j) * every - L;
+      if (since > 0.0) level += K * (j % 2 == 1 ? 5.0 : -5.0) * (1.0 - std::exp(-since / T));
+    }
+    y[k] = 0.1 * std::round((level + noise(rng)) / 0.1);
+  }
+  rec.set_column("t_s", t);
+  rec.set_column("u_mm", u);
+  rec.set_column("y_dwe_mm", y);
+  return prepare_data(rec);
+}
+
+void BM_LiomFitSlowPoolStepTest(benchmark::State& state) {
+  const auto data = slow_pool_step_test(static_cast<std::size_t>(state.range(0)));
+  FitOptions options;
+  options.threads = 1;
+  Model fitted;
+  double nrmse = 0.0;
+  int evaluations = 0;
+  for (auto _ : state) {
+    const auto r = fit(ModelKind::liom, data, options);
+    fitted = r.model;
+    nrmse = r.nrmse.front();
+    evaluations = r.evaluations;
+    benchmark::DoNotOptimize(r.model.p.K);
+  }
+  state.counters["K"] = fitted.p.K;
+  state.counters["T_s"] = fitted.p.T;
+  state.counters["L_s"] = fitted.p.L;
+  state.counters["nrmse"] = nrmse;
+  state.counters["evaluations"] = evaluations;
+}
+BENCHMARK(BM_LiomFitSlowPoolStepTest)->Arg(1000000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_NlfomSFit(benchmark::State& state) {
   Model truth{ModelKind::nlfom_s, {}, {}};

@@ -64,7 +64,8 @@ TEST(Recording, NonNumericAndNaNValuesNameLineAndColumn) {
 TEST(Recording, TimeMustIncreaseUniformly) {
   EXPECT_EQ(message_of("t_s,u_mm,y_dwe_mm\n0,1,2\n0.1,1,2\n0.1,1,2\n"), "rec.csv:4: t_s is not increasing (0.1 then 0.1)");
   EXPECT_EQ(message_of("t_s,u_mm,y_dwe_mm\n0,1,2\n0.1,1,2\n0.3,1,2\n"),
-            "rec.csv:4: t_s is not uniformly sampled (step 0.2 s, expected 0.1 s, within 1 %)");
+            "rec.csv:4: t_s is not uniformly sampled (step 0.2 s, expected 0.1 s, within 1 %); resample it "
+            "first, e.g. canalsim resample rec.csv -o uniform.csv --period 0.15");
 }
 
 TEST(Recording, RowOfWrongLengthAndMissingHeaderAreRejected) {

@@ -90,5 +90,52 @@ TEST(RequireUpstreamLevel, NamesTheFileTheModelAndTheWayOut) {
   }
 }
 
+// Declared units: a command in encoder counts (0.13 mm each) and levels in cm become mm inside,
+// and a gain in mm/mm converts to cm/counts by u_scale / y_scale.
+TEST(DeclaredUnits, CountsAndCentimetresAreConvertedToMillimetres) {
+  Recording rec;
+  rec.source = "counts.csv";
+  rec.set_meta("u_unit", "counts");
+  rec.set_meta("u_scale_mm_per_unit", "0.13");
+  rec.set_meta("y_unit", "cm");
+  rec.set_meta("y_scale_mm_per_unit", "10");
+  rec.set_column("t_s", {0.0, 0.1, 0.2, 0.3});
+  rec.set_column("u_mm", {100.0, 100.0, 150.0, 150.0});
+  rec.set_column("y_up_mm", {6.0, 6.0, 6.0, 6.0});
+  rec.set_column("y_dwe_mm", {4.5, 4.5, 4.6, 4.7});
+  const auto d = prepare_data(rec);
+  EXPECT_DOUBLE_EQ(d.u_mm[2], 19.5);
+  EXPECT_DOUBLE_EQ(d.u0_mm, 13.0);
+  EXPECT_DOUBLE_EQ(d.y_dwe_mm[3], 47.0);
+  EXPECT_DOUBLE_EQ(d.y_up_mm[0], 60.0);
+  EXPECT_DOUBLE_EQ(d.y0_mm, 45.0);
+  EXPECT_DOUBLE_EQ(declared_gain_factor(d), 0.013);  // 1 mm/mm = 0.013 cm/count
+  EXPECT_EQ(declared_gain_unit(d), "cm/counts");
+}
+
+TEST(DeclaredUnits, AUnitWithoutAScaleOrABadScaleIsAnErrorNamingTheKey) {
+  Recording rec;
+  rec.source = "counts.csv";
+  rec.set_column("t_s", {0.0, 0.1, 0.2});
+  rec.set_column("u_mm", {100.0, 150.0, 150.0});
+  rec.set_column("y_dwe_mm", {45.0, 45.0, 46.0});
+  rec.set_meta("u_unit", "counts");
+  try {
+    prepare_data(rec);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("counts.csv: metadata u_unit: counts needs u_scale_mm_per_unit"),
+              std::string::npos) << e.what();
+  }
+  rec.set_meta("u_scale_mm_per_unit", "-1");
+  try {
+    prepare_data(rec);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1', expected a positive number"),
+              std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace canalsim::reduced

@@ -1,0 +1,207 @@
+// Identification at any time scale (issue 14): first-order-plus-delay step responses written in
+// closed form, y(t) = y0 + K A (1 − e^{−(t − t_step − L)/T}) after t_step + L, with noise and a
+// sensor that quantises with an offset, sampled at 0.125 s and at 0.01 s, for time constants of
+// 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 % and L
+// within two samples with the default options. The models nested in others never fit better
+// than the models containing them.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <random>
+
+#include "reduced_models/frequency.hpp"
+#include "reduced_models/identification.hpp"
+#include "testing/synthetic.hpp"
+
+namespace canalsim::reduced {
+namespace {
+
+struct StepTest {
+  double K, T, L, h;
+  std::size_t step_sample = 40;  // u steps at this sample
+};
+
+// The recording of a gate step of A = 5 mm seen by a level sensor with noise σ = 0.03 mm and
+// resolution 0.1 mm on a grid offset by 0.037 mm (a sensor zero that is not a multiple of the
+// resolution), long enough to settle (five time constants after the delay).
+Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
+  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037;
+  const double t_step = static_cast<double>(s.step_sample) * s.h;
+  const auto n = static_cast<std::size_t>(std::ceil((t_step + s.L + 5.0 * s.T + 5.0) / s.h));
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::vector<double> t(n), u(n), y(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    t[k] = static_cast<double>(k) * s.h;
+    u[k] = k >= s.step_sample ? u0 + A : u0;
+    const double since = t[k] - t_step - s.L;
+    const double level = y0 + (since > 0.0 ? s.K * A * (1.0 - std::exp(-since / s.T)) : 0.0);
+    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
+  }
+  Recording rec;
+  rec.source = "fopdt.csv";
+  rec.set_column("t_s", t);
+  rec.set_column("u_mm", u);
+  rec.set_column("y_dwe_mm", y);
+  return rec;
+}
+
+// K and T within 5 %; L within two samples, or T/250 when that is longer: the sensor cannot
+// see a delay finer than that on a slow pool (for T = 300 s the level moves 0.008 mm in 0.25 s,
+// under the 0.03 mm noise and 0.1 mm resolution; the IAE optimum itself lies 0.1–0.3 s from the
+// true delay for T = 300 s and 0.12 s for T = 60 s at 0.01 s sampling). That the search is not
+// trapped is shown by the IAE: at most 2 % above that of the true model (often below it).
+void expect_fopdt_recovered(const StepTest& s) {
+  SCOPED_TRACE("T " + std::to_string(s.T) + " s, L " + std::to_string(s.L) + " s, h " +
+               std::to_string(s.h) + " s");
+  const auto data = prepare_data(fopdt_step_recording(s));
+  const auto r = fit(ModelKind::liom, data);
+  EXPECT_NEAR(r.model.p.K, s.K, 0.05 * s.K);
+  EXPECT_NEAR(r.model.p.T, s.T, 0.05 * s.T);
+  EXPECT_NEAR(r.model.p.L, s.L, std::max(2.0 * s.h, s.T / 250.0));
+  Model truth{ModelKind::liom, {}, {}};
+  truth.p.K = s.K;
+  truth.p.T = s.T;
+  truth.p.L = s.L;
+  EXPECT_LE(r.iae_total, 1.02 * validate_model(truth, data).iae);
+  EXPECT_GT(r.nrmse.front(), 90.0);
+}
+
+TEST(TimeScale, FopdtStepResponsesAreRecoveredAtAQuarterSecondSampling) {
+  for (const StepTest s : {StepTest{2.0, 2.0, 1.5, 0.125}, StepTest{2.0, 2.0, 12.0, 0.125},
+                           StepTest{2.0, 20.0, 1.5, 0.125}, StepTest{0.7, 20.0, 0.5, 0.125},
+                           StepTest{2.0, 60.0, 1.5, 0.125}, StepTest{1.3, 60.0, 6.0, 0.125},
+                           StepTest{2.0, 300.0, 12.0, 0.125}, StepTest{2.0, 300.0, 0.5, 0.125}}) {
+    expect_fopdt_recovered(s);
+  }
+}
+
+TEST(TimeScale, FopdtStepResponsesAreRecoveredAtTenMillisecondSampling) {
+  for (const StepTest s : {StepTest{2.0, 2.0, 1.5, 0.01}, StepTest{2.0, 20.0, 12.0, 0.01},
+                           StepTest{2.0, 60.0, 0.5, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01}}) {
+    expect_fopdt_recovered(s);
+  }
+}
+
+TEST(TimeScale, AStepAtTheRecordingsSecondSampleFits) {
+  StepTest s{2.0, 20.0, 1.5, 0.125};
+  s.step_sample = 1;
+  expect_fopdt_recovered(s);
+}
+
+// The canal-control models from their own closed-form step responses: ID (Schuurmans et al.
+// 1999), Δy = K A (t − t_step − L), and IDZ (Litrico & Fromion 2004), Δy = K A (t − t_step − L +
+// Tz) after t_step + L; K in mm/(mm·s). Same sensor as above, 0.125 s sampling, 300 s.
+Recording integrator_step_recording(double K, double Tz, double L, double h) {
+  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037, t_step = 5.0;
+  const auto n = static_cast<std::size_t>(300.0 / h);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::vector<double> t(n), u(n), y(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    t[k] = static_cast<double>(k) * h;
+    u[k] = t[k] >= t_step - 1e-9 ? u0 + A : u0;
+    const double since = t[k] - t_step - L;
+    const double level = y0 + (since > 0.0 ? K * A * (since + Tz) : 0.0);
+    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
+  }
+  Recording rec;
+  rec.source = "integrator.csv";
+  rec.set_column("t_s", t);
+  rec.set_column("u_mm", u);
+  rec.set_column("y_dwe_mm", y);
+  return rec;
+}
+
+// On a ramp a delay error is a level offset: the operating point y0 (mean of the quantised rest
+// samples) is known to about 0.01 mm here, i.e. 0.1 s of delay on the 0.1 mm/s ramp. So L is
+// held to two samples at 0.125 s, and at 0.01 s to 0.15 s together with an IAE at most that of
+// the true model (the fit there is 0.107 s late with an IAE 3 % below the truth's).
+TEST(CanalControlModels, IntegratorDelayIsRecoveredFromItsClosedFormStepResponse) {
+  for (const double L : {0.5, 4.0, 12.0}) {
+    for (const double h : {0.125, 0.01}) {
+      SCOPED_TRACE("L " + std::to_string(L) + " s, h " + std::to_string(h) + " s");
+      const auto data = prepare_data(integrator_step_recording(0.02, 0.0, L, h));
+      const auto r = fit(ModelKind::id, data);
+      EXPECT_NEAR(r.model.p.K, 0.02, 0.05 * 0.02);
+      EXPECT_NEAR(r.model.p.L, L, std::max(2.0 * h, 0.15));
+      Model truth{ModelKind::id, {}, {}};
+      truth.p.K = 0.02;
+      truth.p.L = L;
+      EXPECT_LE(r.iae_total, validate_model(truth, data).iae);
+      EXPECT_GT(r.nrmse.front(), 90.0);
+    }
+  }
+}
+
+TEST(CanalControlModels, IntegratorDelayZeroIsRecoveredFromItsClosedFormStepResponse) {
+  for (const double Tz : {10.0, 40.0}) {
+    for (const double L : {1.5, 8.0}) {
+      SCOPED_TRACE("Tz " + std::to_string(Tz) + " s, L " + std::to_string(L) + " s");
+      const auto r = fit(ModelKind::idz, prepare_data(integrator_step_recording(0.02, Tz, L, 0.125)));
+      EXPECT_NEAR(r.model.p.K, 0.02, 0.05 * 0.02);
+      EXPECT_NEAR(r.model.p.Tz, Tz, 0.05 * Tz);
+      EXPECT_NEAR(r.model.p.L, L, 2.0 * 0.125);
+      EXPECT_GT(r.nrmse.front(), 90.0);
+    }
+  }
+}
+
+TEST(CanalControlModels, IdzNeverFitsWorseThanIdWhichItContains) {
+  const auto data = prepare_data(fopdt_step_recording(StepTest{2.0, 60.0, 3.0, 0.125}));
+  EXPECT_LE(fit(ModelKind::idz, data).iae_total, fit(ModelKind::id, data).iae_total * (1.0 + 1e-9));
+}
+
+// Their transfer functions: ID K e^{−Ls}/s (gain K/ω, phase −π/2 − ωL) and IDZ K (1/s + Tz) e^{−Ls}
+// (gain K √(1/ω² + Tz²), tending to the direct gain K·Tz at high frequency).
+TEST(CanalControlModels, FrequencyResponsesAreTheIntegratorsAndTheZeros) {
+  Model id{ModelKind::id, {}, {}};
+  id.p.K = 0.02;
+  id.p.L = 4.0;
+  const double omega = 0.3;
+  const auto g = frequency_response(id, OperatingPoint{}, omega);
+  EXPECT_NEAR(std::abs(g), 0.02 / omega, 1e-12);
+  EXPECT_NEAR(std::remainder(std::arg(g) - (-std::numbers::pi / 2.0 - omega * 4.0), 2.0 * std::numbers::pi), 0.0, 1e-12);
+  Model idz = id;
+  idz.kind = ModelKind::idz;
+  idz.p.Tz = 40.0;
+  EXPECT_NEAR(std::abs(frequency_response(idz, OperatingPoint{}, omega)),
+              0.02 * std::sqrt(1.0 / (omega * omega) + 1600.0), 1e-12);
+  EXPECT_NEAR(std::abs(frequency_response(idz, OperatingPoint{}, 1e4)), 0.02 * 40.0, 1e-4);
+}
+
+// Every pair of nested models on data none of them represents exactly (two lags in series, the
+// gain following the upstream level): the model that contains another fits at least as well.
+TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
+  Model truth{ModelKind::sopd, {}, {}};
+  truth.p.K = 0.8;
+  truth.p.T = 3.0;
+  truth.p.T2 = 0.8;
+  truth.p.L = 2.5;
+  testing::SyntheticSpec spec;
+  spec.n = 1500;
+  spec.y_up_swing = 8.0;
+  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  FitOptions o;
+  o.actuation.quantum_mm = 0.05;
+  std::map<ModelKind, double> iae;
+  for (auto kind : {ModelKind::liom, ModelKind::lfom, ModelKind::nliom_f, ModelKind::nliom_s,
+                    ModelKind::nlfom_f, ModelKind::nlfom_s}) {
+    iae[kind] = fit(kind, data, o).iae_total;
+  }
+  const std::vector<std::pair<ModelKind, ModelKind>> pairs = {
+      {ModelKind::lfom, ModelKind::liom},     {ModelKind::nliom_f, ModelKind::liom},
+      {ModelKind::nliom_s, ModelKind::liom},  {ModelKind::nlfom_f, ModelKind::nliom_f},
+      {ModelKind::nlfom_f, ModelKind::lfom},  {ModelKind::nlfom_f, ModelKind::liom},
+      {ModelKind::nlfom_s, ModelKind::nliom_s}, {ModelKind::nlfom_s, ModelKind::lfom},
+      {ModelKind::nlfom_s, ModelKind::liom}};
+  for (const auto& [outer, inner] : pairs) {
+    EXPECT_LE(iae[outer], iae[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
+  }
+}
+
+}  // namespace
+}  // namespace canalsim::reduced
