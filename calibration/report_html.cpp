@@ -6,24 +6,13 @@
 #include <sstream>
 
 #include "calibration/report.hpp"
+
+#include "core/html.hpp"
 #include "core/format.hpp"
 
 namespace canalsim::calibration {
 namespace {
 
-std::string esc(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 struct Line {
   std::vector<double> x, y;
@@ -59,9 +48,9 @@ std::string plot(const std::vector<Line>& lines, const std::string& x_label, con
   s << "<text x='" << W - R << "' y='" << H - B + 14 << "' font-size='11' text-anchor='end'>" << label(x1, log_x) << "</text>";
   s << "<text x='" << L - 4 << "' y='" << H - B << "' font-size='11' text-anchor='end'>" << label(y0, log_y) << "</text>";
   s << "<text x='" << L - 4 << "' y='" << T + 10 << "' font-size='11' text-anchor='end'>" << label(y1, log_y) << "</text>";
-  s << "<text x='" << (L + W - R) / 2 << "' y='" << H - 6 << "' font-size='12' text-anchor='middle'>" << esc(x_label) << "</text>";
+  s << "<text x='" << (L + W - R) / 2 << "' y='" << H - 6 << "' font-size='12' text-anchor='middle'>" << html::escape(x_label) << "</text>";
   s << "<text x='12' y='" << (H - B + T) / 2 << "' font-size='12' transform='rotate(-90 12 " << (H - B + T) / 2
-    << ")' text-anchor='middle'>" << esc(y_label) << "</text>";
+    << ")' text-anchor='middle'>" << html::escape(y_label) << "</text>";
   int row = 0;
   for (const auto& l : lines) {
     s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
@@ -74,7 +63,7 @@ std::string plot(const std::vector<Line>& lines, const std::string& x_label, con
     s << "'/>";
     s << "<line x1='" << W - R + 10 << "' x2='" << W - R + 30 << "' y1='" << T + 12 + 16 * row << "' y2='"
       << T + 12 + 16 * row << "' stroke='" << l.colour << "' stroke-width='2'/>";
-    s << "<text x='" << W - R + 34 << "' y='" << T + 16 + 16 * row << "' font-size='11'>" << esc(l.label) << "</text>";
+    s << "<text x='" << W - R + 34 << "' y='" << T + 16 + 16 * row << "' font-size='11'>" << html::escape(l.label) << "</text>";
     ++row;
   }
   s << "</svg>";
@@ -111,10 +100,10 @@ std::string correlation_picture(const Calibration& c) {
     << "'>";
   for (std::size_t a = 0; a < p; ++a) {
     s << "<text x='" << left - 6 << "' y='" << top + cell * a + cell / 2 + 4 << "' font-size='12' text-anchor='end'>"
-      << esc(c.parameters[a].name) << "</text>";
+      << html::escape(c.parameters[a].name) << "</text>";
     const double x = left + cell * a + cell / 2, y = top + cell * p + 8;
     s << "<text x='" << x << "' y='" << y << "' font-size='12' transform='rotate(60 " << x << ' ' << y << ")'>"
-      << esc(c.parameters[a].name) << "</text>";
+      << html::escape(c.parameters[a].name) << "</text>";
     for (std::size_t b = 0; b < p; ++b) {
       const double r = c.correlation.size() > a && c.correlation[a].size() > b ? c.correlation[a][b] : NAN;
       std::string fill = "#bbbbbb";
@@ -138,13 +127,13 @@ std::string correlation_picture(const Calibration& c) {
 
 std::string html_report(const Calibration& c, const std::string& title) {
   std::ostringstream h;
-  h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << esc(title) << "</title><style>"
+  h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << html::escape(title) << "</title><style>"
     << "body{font-family:sans-serif;max-width:1000px;margin:1em auto;color:#222}table{border-collapse:collapse}"
     << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f3f3f3}"
     << "td.l{text-align:left}pre{background:#f7f7f7;padding:8px}</style></head><body>";
-  h << "<h1>" << esc(title) << "</h1>";
+  h << "<h1>" << html::escape(title) << "</h1>";
   if (!c.ok) {
-    h << "<p>Calibration failed: " << esc(c.message) << "</p></body></html>";
+    h << "<p>Calibration failed: " << html::escape(c.message) << "</p></body></html>";
     return h.str();
   }
   h << "<p>Weighted cost per sample " << format_g(c.cost_before, 4) << " &rarr; " << format_g(c.cost_after, 4) << "; "
@@ -154,10 +143,10 @@ std::string html_report(const Calibration& c, const std::string& title) {
   h << "<h2>Parameters</h2><table><tr><th>parameter</th><th>start</th><th>estimate</th><th>&plusmn; std</th>"
     << "<th>bounds</th><th>unit</th><th>scenario key</th><th>sensitivity</th></tr>";
   for (const auto& p : c.parameters) {
-    h << "<tr><td class='l'>" << esc(p.name) << "</td><td>" << format_g(p.start, 5) << "</td><td>" << format_g(p.value, 5)
+    h << "<tr><td class='l'>" << html::escape(p.name) << "</td><td>" << format_g(p.start, 5) << "</td><td>" << format_g(p.value, 5)
       << (p.at_bound ? " (bound)" : "") << "</td><td>" << (std::isfinite(p.std) ? format_g(p.std, 2) : "not determined")
-      << "</td><td>[" << format_g(p.low, 4) << ", " << format_g(p.high, 4) << "]</td><td>" << esc(p.unit)
-      << "</td><td class='l'>" << esc(p.key) << "</td><td>" << format_g(p.sensitivity, 3) << "</td></tr>";
+      << "</td><td>[" << format_g(p.low, 4) << ", " << format_g(p.high, 4) << "]</td><td>" << html::escape(p.unit)
+      << "</td><td class='l'>" << html::escape(p.key) << "</td><td>" << format_g(p.sensitivity, 3) << "</td></tr>";
   }
   h << "</table>";
   if (!c.identifiability.empty()) {
@@ -165,8 +154,8 @@ std::string html_report(const Calibration& c, const std::string& title) {
     for (const auto& u : c.identifiability) {
       std::string names;
       for (const auto& n : u.parameters) names += (names.empty() ? "" : ", ") + n;
-      h << "<li><b>" << esc(names) << "</b>: " << esc(u.reason)
-        << (u.determined.empty() ? "" : "; determined: " + esc(u.determined)) << "</li>";
+      h << "<li><b>" << html::escape(names) << "</b>: " << html::escape(u.reason)
+        << (u.determined.empty() ? "" : "; determined: " + html::escape(u.determined)) << "</li>";
     }
     h << "</ul>";
   }
@@ -174,17 +163,17 @@ std::string html_report(const Calibration& c, const std::string& title) {
   h << "<h2>Fit per recording and channel</h2><table><tr><th>recording</th><th>channel</th><th>RMS before</th>"
     << "<th>RMS after</th><th>Nrmse before</th><th>Nrmse after</th></tr>";
   for (const auto& f : c.fits) {
-    h << "<tr><td class='l'>" << esc(f.recording) << (f.validation ? " (validation)" : "") << "</td><td class='l'>"
-      << esc(f.channel) << "</td><td>" << format_fixed(f.rms_before, 3) << "</td><td>" << format_fixed(f.rms_after, 3)
+    h << "<tr><td class='l'>" << html::escape(f.recording) << (f.validation ? " (validation)" : "") << "</td><td class='l'>"
+      << html::escape(f.channel) << "</td><td>" << format_fixed(f.rms_before, 3) << "</td><td>" << format_fixed(f.rms_after, 3)
       << "</td><td>" << format_fixed(f.nrmse_before, 1) << " %</td><td>" << format_fixed(f.nrmse_after, 1)
       << " %</td></tr>";
   }
   h << "</table>";
-  if (c.grid.done) h << "<p><b>Grid check.</b> " << esc(c.grid.verdict) << ".</p>";
+  if (c.grid.done) h << "<p><b>Grid check.</b> " << html::escape(c.grid.verdict) << ".</p>";
   h << "<h2>Responses and residuals</h2>";
   for (const auto& s : c.series) {
     if (s.channel != "y_dwe_mm" && s.channel != "y_dw_mm") continue;
-    h << "<h3>" << esc(s.recording) << (s.validation ? " (validation)" : "") << " &mdash; " << esc(s.channel) << "</h3>";
+    h << "<h3>" << html::escape(s.recording) << (s.validation ? " (validation)" : "") << " &mdash; " << html::escape(s.channel) << "</h3>";
     h << plot({{s.t, s.recorded, "#777", "recorded"}, {s.t, s.nominal, "#d62728", "nominal"},
                {s.t, s.calibrated, "#1f77b4", "calibrated"}},
               "t [s]", s.channel);
@@ -199,7 +188,7 @@ std::string html_report(const Calibration& c, const std::string& title) {
     h << plot({spectrum(before, period, "#d62728", "before"), spectrum(after, period, "#1f77b4", "after")}, "f [Hz]",
               "|residual| amplitude", true, true);
   }
-  h << "<h2>Solver</h2><pre>" << esc(c.solver_report) << "</pre></body></html>";
+  h << "<h2>Solver</h2><pre>" << html::escape(c.solver_report) << "</pre></body></html>";
   return h.str();
 }
 

@@ -1,5 +1,7 @@
 #include "calibration/scenario_file.hpp"
 
+#include "core/text.hpp"
+
 #include <map>
 #include <sstream>
 
@@ -8,13 +10,6 @@
 
 namespace canalsim::calibration {
 namespace {
-
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  const auto b = s.find_last_not_of(" \t\r");
-  return s.substr(a, b - a + 1);
-}
 
 // The table a header line opens ("[a.b]" -> "a.b", the k-th "[[pools]]" -> "pools[k]"), or "".
 std::string header_of(const std::string& line, std::map<std::string, int>& array_counts) {

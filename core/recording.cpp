@@ -1,5 +1,7 @@
 #include "core/recording.hpp"
 
+#include "core/text.hpp"
+
 #include "core/format.hpp"
 
 #include <algorithm>
@@ -11,13 +13,6 @@
 
 namespace canalsim {
 namespace {
-
-std::string trim(const std::string& s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
 
 std::vector<std::string> split_csv_line(const std::string& line) {
   std::vector<std::string> fields;
