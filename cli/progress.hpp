@@ -1,39 +1,70 @@
-// A progress line on stderr for anything that takes more than a moment: "label: 42%" rewritten in
-// place on a terminal; on a pipe or file only the final line, so logs stay readable.
+// A progress line on stderr for anything that takes more than a moment (core/progress.hpp's
+// ProgressLine: rewritten in place on a terminal, a line at most every 5 s on a pipe or file).
+// Nothing is printed for work done within 1.5 s; anything longer shows a line by then even when
+// the work reports nothing for a while (a long Newton solve, a long first step), so that no run
+// is silent for minutes: a heartbeat thread repeats the last report.
 #pragma once
 
-#include <cstdio>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <string>
-#include <unistd.h>
+#include <thread>
+
+#include "core/progress.hpp"
 
 namespace canalsim::cli {
 
 class Progress {
  public:
-  explicit Progress(std::string label) : label_(std::move(label)), tty_(::isatty(STDERR_FILENO) != 0) {}
+  explicit Progress(std::string label)
+      : line_(std::move(label)), start_(std::chrono::steady_clock::now()), heartbeat_([this] { beat(); }) {}
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
   ~Progress() { finish(); }
 
-  // fraction in [0, 1]; redraws only when the whole percentage changes.
+  // fraction in [0, 1].
   void update(double fraction) {
-    const int percent = static_cast<int>(fraction * 100.0 + 1e-9);
-    if (percent == last_ || !tty_) return;
-    last_ = percent;
-    std::fprintf(stderr, "\r%s: %3d%%", label_.c_str(), percent);
-    std::fflush(stderr);
+    std::unique_lock lock(mutex_);
+    last_.fraction = fraction;
+    if (done_ || std::chrono::steady_clock::now() - start_ < kQuiet) return;
+    const ProgressReport report = last_;
+    lock.unlock();
+    line_.report(report);
   }
   void finish() {
-    if (done_) return;
-    done_ = true;
-    if (tty_) std::fprintf(stderr, "\r%s: done\n", label_.c_str());
+    {
+      const std::lock_guard lock(mutex_);
+      if (done_) return;
+      done_ = true;
+    }
+    wake_.notify_all();
+    heartbeat_.join();
+    line_.finish();
   }
 
  private:
-  std::string label_;
-  bool tty_;
-  int last_ = -1;
+  static constexpr std::chrono::milliseconds kQuiet{1500};
+
+  void beat() {
+    std::unique_lock lock(mutex_);
+    if (wake_.wait_for(lock, kQuiet, [this] { return done_; })) return;
+    while (!done_) {
+      const ProgressReport report = last_;
+      lock.unlock();
+      line_.report(report);
+      lock.lock();
+      wake_.wait_for(lock, std::chrono::seconds(1), [this] { return done_; });
+    }
+  }
+
+  ProgressLine line_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  ProgressReport last_{0.0, ""};
   bool done_ = false;
+  std::chrono::steady_clock::time_point start_;
+  std::thread heartbeat_;
 };
 
 }  // namespace canalsim::cli

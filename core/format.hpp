@@ -12,4 +12,8 @@ std::string format_g(double value, int significant = 6);
 // Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or nan.
 std::string format_fixed(double value, int decimals);
 
+// A value echoed in a message: at most the first 60 characters (whole UTF-8 characters) and
+// then "... (N characters)", so that a 1 MB field does not make a 1 MB error line.
+std::string format_excerpt(const std::string& text);
+
 }  // namespace canalsim

@@ -76,6 +76,8 @@ struct SimulateOptions {
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
+  // Past the ceilings of scenarios/run_cost.hpp (`--allow-long`).
+  bool allow_long_run = false;
   // Called with the canal at the end of the run (tests read the volume balance and final state).
   std::function<void(const BuiltCanal&)> on_finish;
 };
