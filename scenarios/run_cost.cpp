@@ -74,22 +74,26 @@ void RunCostGuard::check(long steps, double time, double last_step) {
   if (allow_long_) return;
   if (!started_) {
     started_ = true;
-    first_steps_ = steps;
-    first_time_ = time;
+    first_steps_ = window_steps_ = steps;
+    window_time_ = time;
     return;
   }
-  // Early steps say little (a start from rest, an event): project once there are enough.
-  constexpr long kSettled = 20000;
-  const long taken = steps - first_steps_;
-  if (taken < kSettled || !(time > first_time_)) return;
-  const double done = std::min(1.0, (time - first_time_) / (end_ - first_time_));
-  const double projected = cells_ * static_cast<double>(taken) / done;
+  // The pace of the last window of steps, not the average since the start: a pool that runs dry
+  // after a minute of normal steps takes 1e-9 s steps from then on.
+  constexpr long kWindow = 20000;
+  if (steps - window_steps_ < kWindow) return;
+  const double pace = (time - window_time_) / static_cast<double>(steps - window_steps_);  // s per step
+  window_steps_ = steps;
+  window_time_ = time;
+  const double remaining = pace > 0.0 ? std::max(end_ - time, 0.0) / pace : INFINITY;
+  const double projected = cells_ * (static_cast<double>(steps - first_steps_) + remaining);
   if (projected <= kMaxCellUpdates) return;
   throw InputError(where_ + "at t = " + format_g(time) + " s the time step is " + format_g(last_step, 3) +
-                   " s after " + std::to_string(taken) + " steps: the whole run would take about " +
-                   format_g(projected, 3) + " cell updates, expected at most " + format_g(kMaxCellUpdates) +
-                   " (the flow is far faster than the canal's waves: check the inflow, widths and openings; "
-                   "or pass --allow-long)");
+                   " s (" + format_g(pace, 3) + " s on average over the last " + std::to_string(kWindow) +
+                   " steps): the whole run would take about " + format_g(projected, 3) +
+                   " cell updates, expected at most " + format_g(kMaxCellUpdates) +
+                   " (a flow far faster than the canal's waves, or a pool running dry: check the inflow, "
+                   "offtakes, widths and openings; or pass --allow-long)");
 }
 
 }  // namespace canalsim::scenarios

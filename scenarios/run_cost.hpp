@@ -38,9 +38,9 @@ void check_run_cost(const Scenario& scenario, const ExperimentSpec& experiment, 
 
 // The same ceiling checked as the run goes: a flow far faster than the estimate's waves (1e5 m³/s
 // into a small canal, a pool 1e-6 m wide behind a 0.08 m gate) makes the time step collapse, and
-// the run would go on for days with its progress line stuck. check() projects the work of the
-// whole run from the steps taken so far and throws InputError (naming the time and the step) when
-// it passes the ceiling, unless allow_long.
+// the run would go on for days with its progress line stuck; so does a pool an offtake drains.
+// check() projects the work of the whole run from the pace of the last 20 000 steps and throws
+// InputError (naming the time and the step) when it passes the ceiling, unless allow_long.
 class RunCostGuard {
  public:
   RunCostGuard(const Scenario& scenario, const ExperimentSpec& experiment, bool allow_long);
@@ -55,7 +55,8 @@ class RunCostGuard {
   bool allow_long_ = false;
   bool started_ = false;
   long first_steps_ = 0;
-  double first_time_ = 0.0;
+  long window_steps_ = 0;
+  double window_time_ = 0.0;
 };
 
 }  // namespace canalsim::scenarios

@@ -50,11 +50,15 @@ TEST(RunCost, TheGuardStopsARunWhoseStepCollapses) {
   const ExperimentSpec& e = *lab.find_experiment("op1");
   RunCostGuard guard(lab, e, false);
   guard.check(0, 0.0, 0.0);
-  EXPECT_NO_THROW(guard.check(30000, 100.0, 0.003));       // 30000 steps for 100 of 255.5 s: fine
-  EXPECT_THROW(guard.check(30000, 1e-3, 3e-8), InputError);  // 30000 steps for 1 ms: 7.7e11 updates
+  EXPECT_NO_THROW(guard.check(30000, 100.0, 0.003));  // 30000 steps for 100 of 255.5 s: ~5e6 updates
+  // Then the step collapses: 20000 steps for 1 ms, 155 s to go -> ~3e11 updates.
+  EXPECT_THROW(guard.check(50000, 100.001, 5e-8), InputError);
   RunCostGuard allowed(lab, e, true);
   allowed.check(0, 0.0, 0.0);
   EXPECT_NO_THROW(allowed.check(30000, 1e-3, 3e-8));
+  RunCostGuard steady(lab, e, false);
+  steady.check(0, 0.0, 0.0);
+  for (long k = 1; k <= 10; ++k) EXPECT_NO_THROW(steady.check(20000 * k, 0.025 * 20000 * static_cast<double>(k), 0.025));
 }
 
 TEST(RunCost, TheEndGateCanBeDriven) {
