@@ -6,7 +6,6 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "cli/progress.hpp"
 #include "diagnosis/blindtest.hpp"
 #include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
@@ -46,10 +45,10 @@ void run(const BlindtestArguments& args) {
     options.model = m;
     if (options.effects.empty()) options.effects = {"gate_rate_limit", "sensor_quantization"};
   }
-  if (const std::string problem = options.validate(); !problem.empty()) throw InputError("blindtest: " + problem);
-  Progress progress("blind test, " + std::to_string(args.trials) + " trials on " + std::to_string(args.threads) +
-                    " threads");
-  options.progress = [&progress](int done, int total) { progress.update(static_cast<double>(done) / total); };
+  if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
+  ProgressLine progress("blind test, " + std::to_string(args.trials) + " trials on " +
+                        std::to_string(args.threads) + " threads");
+  options.progress = progress.callback();
   const diagnosis::BlindtestResult result = diagnosis::run_blindtest(s, options);
   progress.finish();
   std::cout << diagnosis::format_blindtest(result, options);

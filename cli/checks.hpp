@@ -26,11 +26,7 @@ namespace canalsim::cli {
 
 namespace detail {
 
-inline std::string format_number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
+
 
 // The whole string as a finite number, or nothing ("2x", "nan" and "" are not numbers).
 inline bool parse_number(const std::string& text, double& value) {
@@ -47,15 +43,15 @@ inline bool parse_number(const std::string& text, double& value) {
 
 // A finite number in [low, high]; `what` says what the number is ("a level in mm").
 inline CLI::Validator number_in(double low, double high, const std::string& what) {
-  const std::string expected = "expected " + what + " in [" + detail::format_number(low) + ", " +
-                               detail::format_number(high) + "]";
+  const std::string expected = "expected " + what + " in [" + format_g(low) + ", " +
+                               format_g(high) + "]";
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         double v = 0.0;
         if (!detail::parse_number(text, v) || v < low || v > high) return expected + ", got " + format_excerpt(text);
         return "";
       },
-      "[" + detail::format_number(low) + ", " + detail::format_number(high) + "]");
+      "[" + format_g(low) + ", " + format_g(high) + "]");
 }
 
 // A finite number > 0 (no upper limit).

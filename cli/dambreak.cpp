@@ -11,7 +11,7 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "cli/progress.hpp"
+#include "core/progress.hpp"
 #include "core/format.hpp"
 #include "core/recording.hpp"
 #include "scenarios/run_cost.hpp"
@@ -91,10 +91,10 @@ void run_dambreak(int cells, double t_end, bool dry, const std::string& output, 
 
   // Run.
   // In 100 chunks, for the progress line of a long run.
-  Progress progress("dam break, " + std::to_string(cells) + " cells");
+  ProgressLine progress("dam break, " + std::to_string(cells) + " cells");
   for (int k = 1; k <= 100; ++k) {
     if (auto st = canal.advance_to(k == 100 ? t_end : t_end * k / 100.0); !st) throw std::runtime_error("dam break: " + st.message());
-    progress.update(k / 100.0);
+    progress.report({k / 100.0, ""});
   }
   progress.finish();
 

@@ -12,7 +12,6 @@
 #include "cli/checks.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
-#include "cli/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
 #include "reduced_models/models.hpp"
@@ -83,8 +82,8 @@ int run_model(const DiagnoseArguments& args) {
   options.quantum_mm = args.quantum_mm;
   options.gate_speed_mm_s = args.gate_speed_mm_s;
   options.data.upstream_level_mm = args.upstream_level_mm;
-  Progress progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + args.model);
-  options.progress = [&progress](double f, const std::string&) { progress.update(f); };
+  ProgressLine progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + args.model);
+  options.progress = progress.callback();
   const diagnosis::Diagnosis d = diagnosis::diagnose_model(recordings, options);
   progress.finish();
   return write_outputs(d, args, "canalsim diagnosis: " + args.model);
@@ -134,8 +133,8 @@ int run(const DiagnoseArguments& args) {
   options.threads = args.threads;
   options.use_recorded_upstream = args.recorded_upstream;
   options.reconstruct_clock = !args.no_clock;
-  Progress progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + s.name);
-  options.progress = [&progress](double f, const std::string&) { progress.update(f); };
+  ProgressLine progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + s.name);
+  options.progress = progress.callback();
   const diagnosis::Diagnosis d = diagnosis::diagnose(s, recordings, options);
   progress.finish();
   return write_outputs(d, args, "canalsim diagnosis: " + s.name);

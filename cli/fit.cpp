@@ -6,23 +6,21 @@
 //   per recording : one fit each (on two threads), or with --gamma a γ sweep each (Figs. 8, 10)
 //   --nominal     : also one model for all recordings, minimising IAE_c (eq. 21), and the
 //                   uncertainty index Δp (eq. 22) of the per-recording parameters
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "cli/checks.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "reduced_models/identification.hpp"
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 
 namespace canalsim::cli {
@@ -42,39 +40,6 @@ struct FitArguments {
   std::string memory = "short";
   std::size_t memory_terms = 500;
   unsigned threads = 2;
-};
-
-// Progress on stderr once an operation has run for more than a second: on a terminal one line
-// rewritten in place (at most 10 times a second); on a pipe or file a line at most every 5 s.
-class ProgressLine {
- public:
-  ProgressLine() : start_(std::chrono::steady_clock::now()), tty_(::isatty(STDERR_FILENO) != 0) {}
-  ProgressLine(const ProgressLine&) = delete;
-  ProgressLine& operator=(const ProgressLine&) = delete;
-  ~ProgressLine() {
-    if (tty_ && shown_) std::fprintf(stderr, "\n");
-  }
-  void operator()(const std::string& message) {
-    std::lock_guard lock(mutex_);
-    const auto now = std::chrono::steady_clock::now();
-    if (now - start_ < std::chrono::seconds(1)) return;
-    const auto gap = tty_ ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
-    if (shown_ && now - last_ < gap) return;
-    last_ = now;
-    shown_ = true;
-    if (tty_) {
-      std::fprintf(stderr, "\rcanalsim fit: %-60s", message.c_str());
-    } else {
-      std::fprintf(stderr, "canalsim fit: %s\n", message.c_str());
-    }
-    std::fflush(stderr);
-  }
-
- private:
-  std::mutex mutex_;
-  std::chrono::steady_clock::time_point start_, last_;
-  bool tty_;
-  bool shown_ = false;
 };
 
 std::string fixed(double v, int digits) {
@@ -176,14 +141,14 @@ void run_fit(const FitArguments& args) {
     if (uses_upstream_level(kind)) require_upstream_level(data.back(), model_name(kind));
   }
 
-  ProgressLine progress;
+  ProgressLine progress("canalsim fit");
   FitOptions options;
   options.actuation.quantum_mm = args.quantum_mm;
   options.actuation.gate_speed_mm_s = args.gate_speed_mm_s;
   options.simulation.gl.memory = args.memory == "full" ? GlMemory::full : GlMemory::short_memory;
   options.simulation.gl.memory_terms = args.memory_terms;
   options.threads = args.threads;
-  options.progress = [&progress](const std::string& line) { progress(line); };
+  options.progress = progress.callback();
   if (const auto why = options.validate(); !why.empty()) throw InputError(why);
 
   // Per-recording fits.
@@ -193,7 +158,7 @@ void run_fit(const FitArguments& args) {
     for (std::size_t j = 0; j < data.size(); ++j) {
       sweeps.push_back(gamma_sweep(kind, {data[j]}, options, *grid));
       fits.push_back(sweeps.back().best_fit);
-      progress("gamma sweep done for " + data[j].source);
+      progress.report({-1.0, "gamma sweep done for " + data[j].source});
     }
   } else {
     fits = fit_each(kind, data, options);
@@ -207,7 +172,7 @@ void run_fit(const FitArguments& args) {
     } else {
       nominal = fit_nominal(kind, data, options);
     }
-    progress("nominal model done");
+    progress.report({-1.0, "nominal model done"});
   }
 
   // Nothing is printed unless every figure is a number.

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "cli/checks.hpp"
+
+#include "core/format.hpp"
 #include "cli/commands.hpp"
 #include "scenarios/prbs.hpp"
 #include "core/recording.hpp"
@@ -25,11 +27,6 @@ struct PrbsArguments {
   std::string output;
 };
 
-std::string number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", value);
-  return buffer;
-}
 
 void check_arguments(const PrbsArguments& args) {
   if (args.stages < prbs_min_stages || args.stages > prbs_max_stages) {
@@ -37,11 +34,11 @@ void check_arguments(const PrbsArguments& args) {
                      ": expected an integer from 2 to 20");
   }
   if (!(args.clock_s > 0.0) || !std::isfinite(args.clock_s) || args.clock_s > 3600.0) {
-    throw InputError("--clock " + number(args.clock_s) +
+    throw InputError("--clock " + format_g(args.clock_s, 10) +
                      ": expected a clock period in seconds, > 0 and at most 3600");
   }
   if (!(args.amplitude_mm > 0.0) || !std::isfinite(args.amplitude_mm)) {
-    throw InputError("--amplitude " + number(args.amplitude_mm) +
+    throw InputError("--amplitude " + format_g(args.amplitude_mm, 10) +
                      ": expected a positive amplitude in mm");
   }
 }
@@ -85,8 +82,8 @@ std::string sequence_csv(const PrbsSignal& signal, const PrbsArguments& args) {
   }
   rec.set_meta("signal", "prbs");
   rec.set_meta("stages", std::to_string(args.stages));
-  rec.set_meta("clock_s", number(args.clock_s));
-  rec.set_meta("amplitude_mm", number(args.amplitude_mm));
+  rec.set_meta("clock_s", format_g(args.clock_s, 10));
+  rec.set_meta("amplitude_mm", format_g(args.amplitude_mm, 10));
   rec.set_meta("seed", std::to_string(args.seed));
   rec.set_column(columns::time, std::move(t));
   rec.set_column(columns::gate_command, std::move(u));

@@ -3,7 +3,7 @@
 //
 //   1. simulate the lab experiments op1–op4, op1*, op2*, op3b, op4b (builtin scenario "lab") on two
 //      threads;
-//   2. run the study (reduced_models/study.hpp): fits, nominal models, γ sweeps, validation,
+//   2. run the study (study/study.hpp): fits, nominal models, γ sweeps, validation,
 //      uncertainty indices, each table next to the paper's, and the generated conclusions;
 //   3. write DIR/tables.json, DIR/tables.md and DIR/report.html (self-contained, opens offline).
 //
@@ -19,15 +19,17 @@
 #include <mutex>
 #include <string>
 #include <system_error>
-#include <thread>
+
 #include <unistd.h>
 #include <vector>
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "reduced_models/study.hpp"
+#include "study/render.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/prbs.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "scenarios/simulate.hpp"
 
@@ -40,42 +42,6 @@ struct ReproduceArguments {
   std::string out = "reproduce";
   double gamma_step = 0.05;
   unsigned threads = 2;
-};
-
-// One progress line on stderr: rewritten in place on a terminal (at most 10 times a second),
-// a line at most every 5 s otherwise.
-class ProgressLine {
- public:
-  ProgressLine() : tty_(::isatty(STDERR_FILENO) != 0), start_(std::chrono::steady_clock::now()) {}
-  ProgressLine(const ProgressLine&) = delete;
-  ProgressLine& operator=(const ProgressLine&) = delete;
-  ~ProgressLine() { finish(); }
-  void operator()(const std::string& message, bool force = false) {
-    std::lock_guard lock(mutex_);
-    const auto now = std::chrono::steady_clock::now();
-    const auto gap = tty_ ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
-    if (!force && shown_ && now - last_ < gap) return;
-    last_ = now;
-    shown_ = true;
-    const double elapsed = std::chrono::duration<double>(now - start_).count();
-    if (tty_) {
-      std::fprintf(stderr, "\r\033[Kcanalsim reproduce [%5.1f s]: %.90s", elapsed, message.c_str());
-    } else {
-      std::fprintf(stderr, "canalsim reproduce [%5.1f s]: %s\n", elapsed, message.c_str());
-    }
-    std::fflush(stderr);
-  }
-  void finish() {
-    std::lock_guard lock(mutex_);
-    if (tty_ && shown_) std::fprintf(stderr, "\n");
-    shown_ = false;
-  }
-
- private:
-  std::mutex mutex_;
-  bool tty_;
-  bool shown_ = false;
-  std::chrono::steady_clock::time_point start_, last_;
 };
 
 // Fails early (before minutes of work) when DIR cannot be created or written.
@@ -104,38 +70,26 @@ std::map<std::string, Recording> simulate_lab(const std::vector<std::string>& na
     if (!lab.find_experiment(n)) throw InputError("builtin scenario lab: no experiment '" + n + "'");
   }
   std::vector<Recording> out(names.size());
-  std::vector<std::string> errors(names.size());
   std::vector<std::atomic<int>> percent(names.size());
-  std::atomic<std::size_t> next{0};
-  std::mutex report;
-  const auto worker = [&] {
-    for (std::size_t i = next++; i < names.size(); i = next++) {
-      try {
-        scenarios::SimulateOptions options;
-        options.progress = [&, i](double f) {
-          percent[i] = static_cast<int>(100.0 * f);
-          std::string line = "simulating the lab:";
-          for (std::size_t k = 0; k < names.size(); ++k) {
-            line += " " + names[k] + " " + std::to_string(percent[k].load()) + "%";
-          }
-          progress(line);
-        };
-        out[i] = scenarios::simulate(lab, *lab.find_experiment(names[i]), options);
-        percent[i] = 100;
-      } catch (const std::exception& e) {
-        std::lock_guard lock(report);
-        errors[i] = e.what();
+  parallel_for(names.size(), static_cast<int>(threads), [&](std::size_t i) {
+    scenarios::SimulateOptions options;
+    options.progress = [&, i](const ProgressReport& report) {
+      percent[i] = static_cast<int>(100.0 * report.fraction);
+      std::string line = "simulating the lab:";
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        line += " " + names[k] + " " + std::to_string(percent[k].load()) + "%";
       }
+      progress.report({-1.0, line});
+    };
+    try {
+      out[i] = scenarios::simulate(lab, *lab.find_experiment(names[i]), options);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("simulating lab/" + names[i] + ": " + e.what());
     }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 0; t < std::max(1u, threads); ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+    percent[i] = 100;
+  });
   std::map<std::string, Recording> recordings;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (!errors[i].empty()) throw std::runtime_error("simulating lab/" + names[i] + ": " + errors[i]);
-    recordings[names[i]] = std::move(out[i]);
-  }
+  for (std::size_t i = 0; i < names.size(); ++i) recordings[names[i]] = std::move(out[i]);
   return recordings;
 }
 
@@ -144,25 +98,25 @@ void run_reproduce(const ReproduceArguments& args) {
   const fs::path dir = args.out;
   check_output_directory(dir);
 
-  reduced::study::StudyOptions options;
+  study::StudyOptions options;
   options.gamma = {0.0, 10.0, args.gamma_step};
   options.threads = args.threads;
   const PrbsDesign design = design_prbs(9, 0.5);  // the lab experiments' PRBS (paper Section 4.3)
   options.prbs_clock_s = design.clock_period;
   options.prbs_stages = design.stages;
-  if (const auto why = options.validate(); !why.empty()) throw InputError(why);
+  if (const Status status = options.validate(); !status) throw InputError(status.message());
 
-  ProgressLine progress;
-  options.progress = [&progress](const std::string& line) { progress(line); };
-  const reduced::study::ExperimentRoles roles;
-  progress("simulating the lab experiments", true);
+  ProgressLine progress("canalsim reproduce");
+  options.progress = progress.callback();
+  const study::ExperimentRoles roles;
+  progress.report({0.0, "simulating the lab experiments"}, true);
   const auto recordings = simulate_lab(roles.all(), args.threads, progress);
-  progress("fitting", true);
-  const auto result = reduced::study::run_study(recordings, options, roles);
-  progress("writing the report", true);
-  const std::string json = reduced::study::to_json(result).dump(1) + "\n";
-  const std::string md = reduced::study::to_markdown(result);
-  const std::string html = reduced::study::to_html(result, recordings, options);
+  progress.report({0.0, "fitting"}, true);
+  const auto result = study::run_study(recordings, options, roles);
+  progress.report({1.0, "writing the report"}, true);
+  const std::string json = study::to_json(result).dump(1) + "\n";
+  const std::string md = study::to_markdown(result);
+  const std::string html = study::to_html(result, recordings, options);
   progress.finish();
 
   // Write: all or nothing. A file that cannot be replaced restores the others' previous contents

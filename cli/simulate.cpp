@@ -9,7 +9,6 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
-#include "cli/progress.hpp"
 #include "scenarios/builtin.hpp"
 #include "core/format.hpp"
 #include "core/recording.hpp"
@@ -104,8 +103,8 @@ void run(const SimulateArguments& args) {
     const auto* e = chosen[i];
     scenarios::SimulateOptions options;
     options.allow_long_run = args.allow_long;
-    Progress progress("simulating " + s.name + "/" + e->name);
-    options.progress = [&progress](double f) { progress.update(f); };
+    ProgressLine progress("simulating " + s.name + "/" + e->name);
+    options.progress = progress.callback();
     const Recording rec = scenarios::simulate(s, *e, options);
     progress.finish();
     for (const auto& line : scenarios::run_report_lines(rec)) std::cerr << "canalsim: " << line << '\n';

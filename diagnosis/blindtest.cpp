@@ -1,5 +1,7 @@
 #include "diagnosis/blindtest.hpp"
 
+#include "core/parallel.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -9,8 +11,8 @@
 #include <mutex>
 #include <numeric>
 #include <sstream>
-#include <thread>
 
+#include "core/parallel.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::diagnosis {
@@ -39,25 +41,19 @@ std::vector<std::string> effect_names(const BlindtestOptions& o) {
 
 }  // namespace
 
-std::string BlindtestOptions::validate() const {
-  std::ostringstream out;
-  if (trials < 1) out << "trials = " << trials << ": expected >= 1";
-  else if (threads < 1) out << "threads = " << threads << ": expected >= 1";
-  else if (experiments.empty()) out << "experiments: expected at least one";
-  else if (!(duration_s == 0.0 || duration_s >= 20.0)) out << "duration_s = " << duration_s << ": expected 0 or >= 20";
-  else if (!(noise_std_mm >= 0.0)) out << "noise_std_mm = " << noise_std_mm << ": expected >= 0";
-  else {
-    for (const auto& e : effects) {
-      if (!effect_from_name(e)) {
-        out << "effects: unknown effect '" << e << "' (expected one of " << catalog_names() << ")";
-        break;
-      }
-    }
-    if (out.str().empty()) {
-      if (const std::string d = diagnose.validate(); !d.empty()) out << "diagnose." << d;
-    }
+Status BlindtestOptions::validate() const {
+  Validator check;
+  check.require(trials >= 1, "trials", trials, ">= 1");
+  check.require(threads >= 1, "threads", threads, ">= 1");
+  check.require(!experiments.empty(), "experiments", "expected at least one");
+  check.require(duration_s == 0.0 || duration_s >= 20.0, "duration_s", duration_s, "0 or >= 20");
+  check.require(noise_std_mm >= 0.0, "noise_std_mm", noise_std_mm, ">= 0");
+  for (const auto& e : effects) {
+    check.require(effect_from_name(e).has_value(), "effects",
+                  "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
-  return out.str();
+  check.nested("diagnose", diagnose.validate());
+  return check.status();
 }
 
 ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng) {
@@ -95,7 +91,7 @@ double parameter_error(const ConcealedEffect& truth, double estimate) {
 }
 
 BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
-  if (const std::string problem = o.validate(); !problem.empty()) throw InputError("blindtest options: " + problem);
+  if (const Status status = o.validate(); !status) throw InputError("blindtest options: " + status.message());
   const auto started = std::chrono::steady_clock::now();
   std::vector<scenarios::ExperimentSpec> experiments;
   for (const auto& name : o.experiments) {
@@ -129,59 +125,54 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   }
   BlindtestResult result;
   result.trials.resize(truths.size());
-  std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
   std::mutex progress_mutex;
   DiagnoseOptions diagnose_options = o.diagnose;
   diagnose_options.threads = 1;
   diagnose_options.progress = nullptr;
-  auto worker = [&] {
-    for (std::size_t i = next++; i < truths.size(); i = next++) {
-      Trial& trial = result.trials[i];
-      trial.index = static_cast<int>(i);
-      trial.truth = truths[i];
-      const auto t0 = std::chrono::steady_clock::now();
-      try {
-        std::vector<Recording> recordings;
-        for (std::size_t k = 0; k < experiments.size(); ++k) {
-          scenarios::Scenario s = base;
-          scenarios::ExperimentSpec e = experiments[k];
-          scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
-          sensors.noise_std_mm = o.noise_std_mm;
-          sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
-          e.sensors = sensors;
-          conceal(trial.truth, s, e, inflow[k]);
-          Recording r = scenarios::simulate(s, e);
-          r.source = "trial" + std::to_string(i) + "/" + e.name;
-          recordings.push_back(std::move(r));
-        }
-        const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
-        if (!d.ok) throw std::runtime_error(d.message);
-        trial.verdict = d.verdict;
-        trial.correct = trial.verdict == trial.truth.effect;
-        trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
-        for (const auto& e : d.effects) {
-          if (e.name == trial.truth.effect) {
-            trial.estimate = e.parameter.value;
-            trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
-          }
-          if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
-        }
-      } catch (const std::exception& ex) {
-        trial.verdict = "failed";
-        trial.message = ex.what();
+  // Each trial catches its own failure (verdict "failed"), so one bad trial does not end the test.
+  parallel_for(truths.size(), o.threads, [&](std::size_t i) {
+    Trial& trial = result.trials[i];
+    trial.index = static_cast<int>(i);
+    trial.truth = truths[i];
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      std::vector<Recording> recordings;
+      for (std::size_t k = 0; k < experiments.size(); ++k) {
+        scenarios::Scenario s = base;
+        scenarios::ExperimentSpec e = experiments[k];
+        scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+        sensors.noise_std_mm = o.noise_std_mm;
+        sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
+        e.sensors = sensors;
+        conceal(trial.truth, s, e, inflow[k]);
+        Recording r = scenarios::simulate(s, e);
+        r.source = "trial" + std::to_string(i) + "/" + e.name;
+        recordings.push_back(std::move(r));
       }
-      trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      const int finished = ++done;
-      if (o.progress) {
-        const std::lock_guard lock(progress_mutex);
-        o.progress(finished, o.trials);
+      const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
+      if (!d.ok) throw std::runtime_error(d.message);
+      trial.verdict = d.verdict;
+      trial.correct = trial.verdict == trial.truth.effect;
+      trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
+      for (const auto& e : d.effects) {
+        if (e.name == trial.truth.effect) {
+          trial.estimate = e.parameter.value;
+          trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
+        }
+        if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
       }
+    } catch (const std::exception& ex) {
+      trial.verdict = "failed";
+      trial.message = ex.what();
     }
-  };
-  std::vector<std::thread> pool;
-  for (int w = 0; w < std::min(o.threads, o.trials); ++w) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+    trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const int finished = ++done;
+    if (o.progress) {
+      const std::lock_guard lock(progress_mutex);
+      o.progress({static_cast<double>(finished) / o.trials, std::to_string(finished) + "/" + std::to_string(o.trials) + " trials"});
+    }
+  });
 
   // Summary.
   result.classes = classes;

@@ -19,6 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/status.hpp"
+#include "core/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
 #include "scenarios/scenario.hpp"
@@ -40,8 +42,8 @@ struct BlindtestOptions {
   // of the scenario; only the effects a reduced model can name make sense to draw then
   // (gate_rate_limit, sensor_quantization).
   std::optional<ModelDiagnoseOptions> model;
-  std::function<void(int done, int total)> progress;
-  [[nodiscard]] std::string validate() const;
+  ProgressCallback progress;  // share of the trials done
+  Status validate() const;
 };
 
 struct ConcealedEffect {

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/observe.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::diagnosis {
@@ -70,22 +71,11 @@ double no_effect_parameter(Effect effect);
 // 1/v in s/mm against 1/material).
 bool is_material(Effect effect, double parameter);
 
-// What the level sensors do to the true levels (gate position and flow sensors are ideal).
-struct SensorModel {
-  double resolution_mm = 0.0;
-  double delay_s = 0.0;
-  double offset_mm = 0.0;
-  // Spread σ of (true level − model level), or 0. With a resolution r > 0, a prediction of the
-  // reading is then its expectation E[Q(y + ε)], ε ~ N(0, σ²), instead of Q(y): when the model is
-  // off by a fraction of a step, rounding it can pick the wrong step, while the expectation is
-  // the mean-square-best prediction of a quantised reading at every σ (σ → 0 gives Q(y),
-  // σ ≫ r gives y).
-  double reading_spread_mm = 0.0;
-};
-
-// E[Q(y + ε)] for Q(v) = r·nint(v/r) and ε ~ N(0, σ²): Σ_m m r P(the reading is m r).
-double expected_reading(double y, double resolution, double spread);
-SensorModel sensor_model_of(const scenarios::SensorSpec& sensors);
+// The level sensor model and its expected reading live with the replay machinery
+// (calibration/observe.hpp); sensor effects edit a SensorModel.
+using calibration::SensorModel;
+using calibration::expected_reading;
+using calibration::sensor_model_of;
 
 // Applies a hydraulic effect to a scenario. `inflow_m3s` is the recording's nominal inflow, the
 // reference of lateral_outflow. Sensor effects change `sensors` instead. Throws

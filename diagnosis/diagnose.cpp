@@ -1,337 +1,52 @@
 #include "diagnosis/diagnose.hpp"
 
-#include "core/laws.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <complex>
-#include <cstdio>
-#include <cstdlib>
-#include <exception>
 #include <limits>
-#include <numbers>
 #include <numeric>
 #include <sstream>
-#include <stdexcept>
-#include <mutex>
-#include <thread>
 
+#include "calibration/replay.hpp"
+#include "core/parallel.hpp"
+#include "diagnosis/scenario_engine.hpp"
 #include "reduced_models/metrics.hpp"
-#include "scenarios/simulate.hpp"
 
 namespace canalsim::diagnosis {
-namespace {
+namespace scenario_engine {
 
-using Channels = std::map<std::string, std::vector<double>>;
-using scenarios::Scenario;
+using calibration::observe;
 
-bool is_level(const std::string& channel) {
-  return channel == columns::upstream_level || channel == columns::level_below_gate ||
-         channel == columns::level_downstream_end;
+// The replay settings of the diagnosis options (calibration/replay.hpp).
+calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
+  calibration::ReplayOptions r;
+  r.channels = o.channels;
+  r.fit_fraction = o.fit_fraction;
+  r.use_recorded_upstream = o.use_recorded_upstream;
+  r.command_lead_samples = o.command_lead_samples;
+  r.reconstruct_clock = o.reconstruct_clock;
+  r.settle_time_s = o.settle_time_s;
+  r.warmup_s = o.warmup_s;
+  return r;
 }
 
-std::string format(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
-// One recording made ready for replay.
-struct Prepared {
-  std::string name;
-  Recording drive;            // t_s shifted: first sample at 0, command lead applied
-  std::vector<double> t, u, regime;
-  Channels data;              // the compared channels the recording has (after the warm-up)
-  double operating_point_mm = 0.0;
-  std::size_t skip = 0;       // warm-up samples dropped from every series
-  bool clocked = false;       // the drive switches at reconstructed clock instants
-  std::size_t n = 0, n_fit = 0;
-};
-
-const scenarios::GateSpec* controlled_gate(const Scenario& s) {
-  if (s.head_gate && s.head_gate->controlled) return &*s.head_gate;
-  for (const auto& g : s.gates) {
-    if (g.controlled) return &g;
+void Engine::prepare() {
+  sensors_ = sensor_model_of(base_.sensors);
+  period_ = base_.sensors.period_s;
+  const calibration::ReplayOptions replay = replay_options(o_);
+  for (const Recording& rec : recordings_) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
+  if (!recs_.empty() && !recs_.front().data.count(o_.primary)) {
+    throw InputError(recs_.front().name + ": missing the primary channel " + o_.primary);
   }
-  return nullptr;
-}
-
-// Runs `task(i)` for i in [0, n) on up to `threads` threads; rethrows the first exception.
-template <class Task>
-void parallel_for(std::size_t n, int threads, const Task& task) {
-  const std::size_t workers = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(threads, 1)));
-  if (workers <= 1) {
-    for (std::size_t i = 0; i < n; ++i) task(i);
-    return;
-  }
-  std::vector<std::exception_ptr> errors(n);
-  std::vector<std::thread> pool;
-  for (std::size_t w = 0; w < workers; ++w) {
-    pool.emplace_back([&, w] {
-      for (std::size_t i = w; i < n; i += workers) {
-        try {
-          task(i);
-        } catch (...) {
-          errors[i] = std::current_exception();
-        }
-      }
-    });
-  }
-  for (auto& t : pool) t.join();
-  for (auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-}
-
-// Linear interpolation of a uniformly sampled series at a fractional index (clamped at the ends:
-// before the first sample the experiment was at its steady state).
-double at_fractional(const std::vector<double>& y, double index) {
-  if (index <= 0.0) return y.front();
-  const double last = static_cast<double>(y.size() - 1);
-  if (index >= last) return y.back();
-  const auto k = static_cast<std::size_t>(index);
-  const double f = index - static_cast<double>(k);
-  return y[k] + f * (y[k + 1] - y[k]);
-}
-
-double quantise_mm(double v, double r) { return laws::quantise(v, r); }
-
-// The level sensors of `m` applied to sampled true levels (paper eq. 17 last).
-Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
-  Channels out;
-  const double shift = m.delay_s / period_s;
-  for (const auto& [name, y] : truth) {
-    if (!is_level(name)) {
-      out[name] = y;
-      continue;
-    }
-    std::vector<double> v(y.size());
-    for (std::size_t k = 0; k < y.size(); ++k) {
-      const double level = at_fractional(y, static_cast<double>(k) - shift) + m.offset_mm;
-      v[k] = m.reading_spread_mm > 0.0 ? expected_reading(level, m.resolution_mm, m.reading_spread_mm)
-                                       : quantise_mm(level, m.resolution_mm);
-    }
-    out[name] = std::move(v);
-  }
-  return out;
-}
-
-// Gate position under a constant-speed actuator (paper eq. 16) driven by the replayed command
-// (the drive's t_s/u_mm step function, exactly as the simulation replays it), at `samples`.
-std::vector<double> rate_limited_position(const Recording& drive, const std::vector<double>& samples, double speed_mm_s) {
-  const auto& ct = drive.column(columns::time);
-  const auto& cu = drive.column(columns::gate_command);
-  // An infinite speed (or inf * 0) is the ideal actuator: at the command (laws::rate_limited_move).
-  const auto move = laws::rate_limited_move;
-  std::vector<double> x;
-  x.reserve(samples.size());
-  double pos = cu.front(), now = ct.front();
-  std::size_t j = 0;
-  for (double s : samples) {
-    while (j + 1 < ct.size() && ct[j + 1] <= s) {
-      pos = move(pos, cu[j], speed_mm_s * (ct[j + 1] - now));
-      now = ct[j + 1];
-      ++j;
-    }
-    pos = move(pos, cu[j], speed_mm_s * (s - now));
-    now = s;
-    x.push_back(pos);
-  }
-  return x;
-}
-
-// Evaluated hypothesis: its parameter, predictions and weighted fitted-part residual vector.
-struct Point {
-  double theta = 0.0;
-  std::vector<Channels> prediction;
-  std::vector<double> r;   // sqrt(w_c) (data - model) over the fitted parts, all channels
-  double cost = 0.0;       // r·r / fitted samples
-};
-
-struct Costs {
-  double fit = 0.0, heldout = 0.0;
-  double nrmse_fit = 0.0, nrmse_heldout = 0.0;
-  // Per-channel mean squared residual (raw units²) on the fitted and held-out parts.
-  std::map<std::string, double> mse_fit, mse_heldout;
-};
-
-class Engine {
- public:
-  Engine(const Scenario& base, const DiagnoseOptions& options) : base_(base), o_(options) {}
-
-  void prepare(const std::vector<Recording>& recordings);
-  void simulate_nominal();
-  EffectResult evaluate_candidate(Effect effect);
-  Point evaluate(Effect effect, double theta);
-  Costs costs(const std::vector<Channels>& prediction) const;
-  // Channel-balanced cost: the mean over channels of MSE_c / MSE_c(nominal), each nominal MSE
-  // floored at a sensor-noise level, so an effect that explains one channel's residual counts
-  // however small that channel's share of the weighted cost (a 0.1 mm lattice error in the
-  // levels next to gate-position glitches).
-  double balanced(const Costs& c, bool heldout) const;
-
-  const std::vector<Prepared>& recordings() const { return recs_; }
-  const std::vector<Channels>& nominal() const { return nominal_; }
-  const std::map<std::string, double>& scale() const { return scale_; }
-  double period() const { return period_; }
-  double base_resolution() const { return sensors_.resolution_mm; }
-  const Point* best_point(const std::string& name) const {
-    const auto it = best_.find(name);
-    return it == best_.end() ? nullptr : &it->second;
-  }
-  std::function<void(const std::string&)> on_simulation;
-
- private:
-  Channels simulate_true(const Scenario& s, const Prepared& p);
-  std::vector<Channels> predict(Effect effect, double theta);
-  std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
-  Point secant_fit(Effect effect, const Point& start, int& sims);
-  Point rate_limit_from_position(int& sims);
-  double lattice_resolution() const;
-  double reading_spread(double resolution) const;
-  double heldout_coherence(double r) const;
-  double correlation_inflation() const { return inflation_; }
-
-  const Scenario& base_;
-  const DiagnoseOptions& o_;
-  std::vector<Prepared> recs_;
-  SensorModel sensors_;
-  double period_ = 0.13;
-  std::map<std::string, double> scale_, weight_;
-  std::vector<Channels> truth_;      // nominal, ideal sensors
-  std::vector<Channels> nominal_;    // nominal, scenario sensors
-  std::vector<double> inflow_m3s_;
-  Point nominal_point_;
-  Costs nominal_costs_;
-  double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
-  std::size_t fit_samples_ = 0;
-  std::map<std::string, Point> best_;
-};
-
-void Engine::prepare(const std::vector<Recording>& recordings) {
-  const scenarios::SensorSpec& s = base_.sensors;
-  sensors_ = sensor_model_of(s);
-  period_ = s.period_s;
-  for (const Recording& rec : recordings) {
-    Prepared p;
-    p.name = rec.source.empty() ? rec.meta("experiment", "recording") : rec.source;
-    const std::vector<double>& t = rec.column(columns::time);
-    const std::vector<double>& u = rec.column(columns::gate_command);
-    const std::size_t total = t.size();
-    p.skip = std::min(total / 3, static_cast<std::size_t>(std::ceil(o_.warmup_s / period_ - 1e-9)));
-    auto tail = [&](const std::vector<double>& v) { return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(p.skip), v.end()); };
-    p.t = tail(t);
-    for (auto& x : p.t) x -= t.front();
-    p.u = tail(u);
-    p.n = p.t.size();
-    p.n_fit = static_cast<std::size_t>(std::round(o_.fit_fraction * static_cast<double>(p.n)));
-    if (rec.has(columns::regime)) p.regime = tail(rec.column(columns::regime));
-    for (const auto& c : o_.channels) {
-      if (rec.has(c)) p.data[c] = tail(rec.column(c));
-    }
-    // The operating point the experiment started from: metadata when it is a valid opening.
-    double op = u.front();
-    const std::string meta = rec.meta("operating_opening_mm");
-    char* end = nullptr;
-    const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
-    const scenarios::GateSpec* gate = controlled_gate(base_);
-    if (!meta.empty() && end && *end == '\0' && parsed >= 0.0 && gate && parsed <= gate->max_opening_m * 1e3) op = parsed;
-    p.operating_point_mm = op;
-    // Drive: time from 0, the command switched `command_lead_samples` early, and one extra row
-    // holding the operating point before the first sample so that the replay settles there.
-    const double shift = t.front() + o_.command_lead_samples * period_;
-    p.drive = Recording{};
-    p.drive.source = rec.source;
-    p.drive.metadata = rec.metadata;
-    for (std::size_t c = 0; c < rec.names.size(); ++c) {
-      std::vector<double> v = rec.columns[c];
-      const std::string& name = rec.names[c];
-      if (name == columns::time) {
-        for (auto& x : v) x -= shift;
-        v.insert(v.begin(), v.front() - 1e-3 * period_);
-      } else {
-        v.insert(v.begin(), name == columns::gate_command ? op : v.front());
-      }
-      p.drive.names.push_back(name);
-      p.drive.columns.push_back(std::move(v));
-    }
-    const bool upstream_replayed = o_.use_recorded_upstream && rec.has(columns::upstream_level);
-    if (o_.reconstruct_clock && !upstream_replayed) {
-      const std::vector<double> switches = command_switch_times(t, u);
-      if (!switches.empty()) {
-        // A drive of the command alone: the operating point before t = 0, u[0] from t = 0,
-        // then each change at its reconstructed instant.
-        std::vector<double> dt{-1e-3 * period_, 0.0}, du{op, u.front()};
-        std::size_t j = 0;
-        for (std::size_t k = 1; k < total; ++k) {
-          if (u[k] == u[k - 1]) continue;
-          const double at = switches[j++] - t.front();
-          if (at <= dt.back()) continue;
-          dt.push_back(at);
-          du.push_back(u[k]);
-        }
-        p.drive = Recording{};
-        p.drive.source = rec.source;
-        p.drive.metadata = rec.metadata;
-        p.drive.set_meta("operating_opening_mm", format(op));
-        p.drive.names = {columns::time, columns::gate_command};
-        p.drive.columns = {dt, du};
-        p.clocked = true;
-      }
-    }
-    recs_.push_back(std::move(p));
-  }
-  // Channel scales: the mean within-recording spread, floored so that a nearly constant channel
-  // (a PID-held upstream level) does not dominate the cost.
-  for (const auto& c : o_.channels) {
-    double sum = 0.0;
-    int count = 0;
-    for (const auto& p : recs_) {
-      const auto it = p.data.find(c);
-      if (it == p.data.end()) continue;
-      const auto& y = it->second;
-      const double m = std::accumulate(y.begin(), y.end(), 0.0) / static_cast<double>(y.size());
-      double v = 0.0;
-      for (double x : y) v += (x - m) * (x - m);
-      sum += std::sqrt(v / static_cast<double>(y.size()));
-      ++count;
-    }
-    if (count == 0) continue;
-    const double floor = c == columns::discharge ? 0.05 : 0.5;
-    scale_[c] = std::max(sum / count, floor);
-    weight_[c] = 1.0 / (scale_[c] * scale_[c]);
-  }
+  calibration::ChannelWeights w = calibration::channel_weights(recs_, o_.channels);
+  scale_ = std::move(w.scale);
+  weight_ = std::move(w.weight);
   for (const auto& p : recs_) fit_samples_ += p.data.size() * p.n_fit;
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
-  scenarios::ExperimentSpec e;
-  e.name = p.name;
-  e.operating_opening_mm = p.operating_point_mm;
-  e.duration_s = (static_cast<double>(p.n + p.skip) - 0.5) * period_;
-  e.input.kind = scenarios::InputKind::constant;
-  scenarios::SensorSpec ideal = s.sensors;
-  ideal.resolution_mm = 0.0;
-  ideal.noise_std_mm = 0.0;
-  ideal.delay_s = 0.0;
-  ideal.offset_mm = 0.0;
-  e.sensors = ideal;
-  scenarios::SimulateOptions so;
-  so.drive.recording = &p.drive;
-  so.drive.use_recorded_upstream = o_.use_recorded_upstream && p.drive.has(columns::upstream_level);
-  so.settle_time = o_.settle_time_s;
-  const Recording r = scenarios::simulate(s, e, so);
-  Channels out;
-  for (const auto& [c, y] : p.data) {
-    if (!r.has(c)) continue;
-    const std::vector<double>& all = r.column(c);
-    std::vector<double> v(all.begin() + static_cast<std::ptrdiff_t>(std::min(p.skip, all.size())), all.end());
-    v.resize(p.n, v.empty() ? 0.0 : v.back());
-    out[c] = std::move(v);
-  }
-  if (on_simulation) on_simulation(p.name);
-  return out;
+  return calibration::replay_true(s, p, replay_options(o_));
 }
 
 std::vector<double> Engine::fit_residuals(const std::vector<Channels>& prediction) const {
@@ -487,225 +202,76 @@ Point Engine::evaluate(Effect effect, double theta) {
   return p;
 }
 
-// Gauss–Newton with a secant Jacobian on the weighted residual vector: each step solves the
-// one-parameter linearisation r(θ) ≈ r_best + J (θ − θ_best) between the best point and its
-// nearest neighbour, within the catalog range.
-Point Engine::secant_fit(Effect effect, const Point& start, int& sims) {
-  const EffectInfo& e = info(effect);
-  std::vector<Point> pts;
-  pts.push_back(start);
-  pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
-  ++sims;
-  const double tol = 2e-3 * (e.theta_high - e.theta_low);
-  while (sims < o_.max_evaluations) {
-    const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
-    const Point* near = nullptr;
-    for (const auto& q : pts) {
-      if (&q == &*best) continue;
-      if (!near || std::abs(q.theta - best->theta) < std::abs(near->theta - best->theta)) near = &q;
-    }
-    const double dtheta = best->theta - near->theta;
-    if (dtheta == 0.0) break;
-    double jj = 0.0, jr = 0.0;
-    for (std::size_t k = 0; k < best->r.size(); ++k) {
-      const double j = (best->r[k] - near->r[k]) / dtheta;
-      jj += j * j;
-      jr += j * best->r[k];
-    }
-    if (!(jj > 0.0)) break;
-    // r = data - model, so the model's sensitivity is -J; the step minimises |r_best + J δ|².
-    double step = -jr / jj;
-    const double span = std::max(4.0 * std::abs(dtheta), 0.1 * (e.theta_high - e.theta_low));
-    step = std::clamp(step, -span, span);
-    const double next = std::clamp(best->theta + step, e.theta_low, e.theta_high);
-    bool seen = false;
-    for (const auto& q : pts) seen = seen || std::abs(q.theta - next) < tol;
-    if (seen) break;
-    pts.push_back(evaluate(effect, next));
-    ++sims;
-  }
-  const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
-  return *best;
-}
 
-// The rate limit shows directly in the recorded gate position: fit the actuator speed to x_up
-// against the command (golden section on θ = 1/v), then simulate once at the estimate.
-Point Engine::rate_limit_from_position(int& sims) {
-  std::vector<std::vector<double>> instants;
-  for (const auto& p : recs_) {
-    std::vector<double> at(p.n);
-    for (std::size_t k = 0; k < p.n; ++k) at[k] = static_cast<double>(p.skip + k) * period_;
-    instants.push_back(std::move(at));
-  }
-  auto cost = [&](double theta) {
-    double s = 0.0;
-    for (std::size_t i = 0; i < recs_.size(); ++i) {
-      const Prepared& p = recs_[i];
-      const auto& x = p.data.at(columns::gate_position);
-      const std::vector<double> m =
-          rate_limited_position(p.drive, instants[i], theta <= 0.0 ? std::numeric_limits<double>::infinity() : 1.0 / theta);
-      for (std::size_t k = 0; k < p.n_fit; ++k) s += (x[k] - m[k]) * (x[k] - m[k]);
-    }
-    return s;
-  };
-  const EffectInfo& e = info(Effect::gate_rate_limit);
-  // Coarse logarithmic scan in speed first: the cost has a plateau at high speed.
-  double best_theta = 0.0, best_cost = cost(0.0);
-  for (double v = 0.5; v <= 400.0; v *= 1.1) {
-    const double c = cost(1.0 / v);
-    if (c < best_cost) { best_cost = c; best_theta = 1.0 / v; }
-  }
-  if (best_theta > 0.0) {
-    double a = best_theta / 1.1, b = std::min(best_theta * 1.1, e.theta_high);
-    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-    for (int it = 0; it < 40; ++it) {
-      const double c = b - g * (b - a), d = a + g * (b - a);
-      if (cost(c) < cost(d)) {
-        b = d;
-      } else {
-        a = c;
-      }
-    }
-    best_theta = 0.5 * (a + b);
-  }
-  if (best_theta <= 0.0) return nominal_point_;
-  ++sims;
-  return evaluate(Effect::gate_rate_limit, best_theta);
-}
 
-// Least-squares lattice step: with k_i = nint(y_i / r), r = Σ y_i k_i / Σ k_i². Levels of tens of
-// millimetres sit ~100 steps from zero, so the scan's 0.005 mm grid is refined to ~1e-5 mm; a
-// step off by 1% would put the model's lattice a whole step away from the recorded one.
-double refine_lattice(const std::vector<const std::vector<double>*>& series, double r) {
-  for (int it = 0; it < 4; ++it) {
-    double yk = 0.0, kk = 0.0;
-    for (const auto* y : series) {
-      for (double v : *y) {
-        const double k = std::round(v / r);
-        yk += v * k;
-        kk += k * k;
-      }
-    }
-    if (!(kk > 0.0)) break;
-    r = yk / kk;
-  }
-  return r;
-}
-
-// The largest resolution r whose lattice r·k holds the recorded levels: |mean exp(2πi y/r)| near 1
-// over a channel that spans at least six lattice steps. The scenario's resolution when none does.
-double Engine::lattice_resolution() const {
-  // Differences from each series' first sample: on the lattice when the samples are, and only
-  // tens of steps from zero, so a coarse scan already finds the right multiples.
-  std::vector<std::vector<double>> diffs;
-  for (const auto& p : recs_) {
-    for (const auto& [c, y] : p.data) {
-      if (!is_level(c) || y.empty()) continue;
-      std::vector<double> d(y.size());
-      for (std::size_t k = 0; k < y.size(); ++k) d[k] = y[k] - y.front();
-      diffs.push_back(std::move(d));
-    }
-  }
-  std::vector<const std::vector<double>*> series;
-  for (const auto& d : diffs) series.push_back(&d);
-  for (double r = info(Effect::sensor_quantization).theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
-    double coherent = 0.0, total = 0.0;
-    for (const auto* y : series) {
-      const auto [lo, hi] = std::minmax_element(y->begin(), y->end());
-      if (*hi - *lo < 6.0 * r) continue;
-      std::complex<double> s = 0.0;
-      for (double v : *y) s += std::polar(1.0, 2.0 * std::numbers::pi * v / r);
-      coherent += std::abs(s);
-      total += static_cast<double>(y->size());
-    }
-    if (total > 0.0 && coherent / total > 0.9) return refine_lattice(series, r);
-  }
-  return sensors_.resolution_mm;
-}
-
-// Lattice coherence |mean exp(2πi (y - y_first)/r)| of the held-out recorded levels.
-double Engine::heldout_coherence(double r) const {
-  std::complex<double> sum = 0.0;
-  double count = 0.0;
-  for (const auto& p : recs_) {
-    for (const auto& [c, y] : p.data) {
-      if (!is_level(c) || p.n_fit >= y.size()) continue;
-      for (std::size_t k = p.n_fit; k < y.size(); ++k) sum += std::polar(1.0, 2.0 * std::numbers::pi * (y[k] - y[p.n_fit]) / r);
-      count += static_cast<double>(y.size() - p.n_fit);
-    }
-  }
-  return count > 0.0 ? std::abs(sum) / count : 0.0;
-}
-
-EffectResult Engine::evaluate_candidate(Effect effect) {
-  const EffectInfo& e = info(effect);
-  EffectResult out;
-  out.name = e.name;
-  out.parameter.name = e.parameter;
-  out.parameter.unit = e.unit;
-  const Costs& before = nominal_costs_;
-  out.cost_before = balanced(before, false);
-  out.heldout_cost_before = balanced(before, true);
-  out.nrmse_before = out.nrmse_after = before.nrmse_fit;
-  out.heldout_nrmse_before = out.heldout_nrmse_after = before.nrmse_heldout;
-  out.cost_after = out.cost_before;
-  out.heldout_cost_after = out.heldout_cost_before;
+EffectResult Engine::explain(const std::string& candidate) {
+  const Effect effect = *effect_from_name(candidate);
   if (const std::string why = unsupported_reason(effect, base_); !why.empty()) {
+    EffectResult out = unchanged(effect);
     out.note = why;
     out.parameter.value = no_effect_parameter(effect);
     return out;
   }
   int sims = 0;
-  Point best;
   switch (effect) {
-    case Effect::sensor_offset: {
-      std::vector<double> d;
-      for (std::size_t i = 0; i < recs_.size(); ++i) {
-        for (const auto& [c, y] : recs_[i].data) {
-          if (!is_level(c)) continue;
-          for (std::size_t k = 0; k < recs_[i].n_fit; ++k) d.push_back(y[k] - nominal_[i].at(c)[k]);
-        }
-      }
-      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-      best = evaluate(effect, d.empty() ? 0.0 : d[d.size() / 2]);
-      break;
-    }
-    case Effect::sensor_delay: {
-      best = nominal_point_;
-      best.theta = 0.0;
-      for (double th = 0.02; th <= e.theta_high + 1e-9; th += 0.02) {
-        Point p = evaluate(effect, th);
-        if (p.cost < best.cost) best = std::move(p);
-      }
-      // Parabola through the grid neighbours.
-      if (best.theta > 0.0 && best.theta < e.theta_high) {
-        const double a = evaluate(effect, best.theta - 0.02).cost, c = evaluate(effect, best.theta + 0.02).cost;
-        const double den = a - 2.0 * best.cost + c;
-        if (den > 0.0) {
-          Point p = evaluate(effect, best.theta + 0.01 * (a - c) / den);
-          if (p.cost < best.cost) best = std::move(p);
-        }
-      }
-      break;
-    }
-    case Effect::sensor_quantization: best = evaluate(effect, lattice_resolution()); break;
+    case Effect::sensor_offset: return judge(effect, fit_sensor_offset(), sims);
+    case Effect::sensor_delay: return judge(effect, fit_sensor_delay(), sims);
+    case Effect::sensor_quantization: return judge(effect, fit_sensor_quantization(), sims);
     case Effect::gate_rate_limit: {
-      bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
-      for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
-      best = have_position ? rate_limit_from_position(sims) : secant_fit(effect, Point{0.0, nominal_, nominal_point_.r, nominal_point_.cost}, sims);
-      if (std::isnan(best.theta)) best.theta = 0.0;
-      break;
+      Point best = fit_gate_rate_limit(sims);
+      return judge(effect, std::move(best), sims);
     }
     default: {
       Point start = nominal_point_;
-      start.theta = e.theta_none;
-      best = secant_fit(effect, start, sims);
+      start.theta = info(effect).theta_none;
+      Point best = fit_by_secant(effect, start, sims);
+      return judge(effect, std::move(best), sims);
     }
   }
+}
+
+// Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
+// point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
+// parameter's unit.
+double Engine::parameter_std(Effect effect, const Point& best) const {
+  double jj = 0.0;
+  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? info(effect).theta_none : nominal_point_.theta);
+  if (std::abs(d_theta) > 0.0) {
+    for (std::size_t k = 0; k < best.r.size(); ++k) {
+      const double j = (best.r[k] - nominal_point_.r[k]) / d_theta;
+      jj += j * j;
+    }
+  }
+  if (!(jj > 0.0) || best.r.size() <= 1) return 0.0;
+  const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
+  const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
+  double slope = 1.0;  // d parameter / d θ
+  if (effect == Effect::gate_rate_limit) slope = best.theta > 0.0 ? 1.0 / (best.theta * best.theta) : 0.0;
+  if (effect == Effect::friction) slope = std::exp(best.theta);
+  return theta_sd * slope;
+}
+
+// An effect's result before it is fitted: its names, and the nominal model's figures before and
+// after.
+EffectResult Engine::unchanged(Effect effect) const {
+  const EffectInfo& e = info(effect);
+  EffectResult out;
+  out.name = e.name;
+  out.parameter.name = e.parameter;
+  out.parameter.unit = e.unit;
+  out.cost_before = out.cost_after = balanced(nominal_costs_, false);
+  out.heldout_cost_before = out.heldout_cost_after = balanced(nominal_costs_, true);
+  out.nrmse_before = out.nrmse_after = nominal_costs_.nrmse_fit;
+  out.heldout_nrmse_before = out.heldout_nrmse_after = nominal_costs_.nrmse_heldout;
+  return out;
+}
+
+// Scores an effect at its fitted point: costs before and after, held-out score, BIC, material,
+// uncertainty and significance (pipeline.hpp's rule).
+EffectResult Engine::judge(Effect effect, Point best, int sims) {
+  const EffectInfo& e = info(effect);
+  EffectResult out = unchanged(effect);
   out.simulations = sims;
-  double value = to_parameter(effect, best.theta);
-  if (effect == Effect::sensor_quantization) value = std::max(value, sensors_.resolution_mm);
-  out.parameter.value = value;
   const Costs after = costs(best.prediction);
   out.cost_after = balanced(after, false);
   out.heldout_cost_after = balanced(after, true);
@@ -713,34 +279,19 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   out.heldout_nrmse_after = after.nrmse_heldout;
   out.score = out.heldout_cost_before > 0.0 ? (out.heldout_cost_before - out.heldout_cost_after) / out.heldout_cost_before : 0.0;
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
-  out.delta_bic = n_eff * std::log(std::max(out.cost_after, 1e-300) / std::max(out.cost_before, 1e-300)) + std::log(n_eff);
-  out.material = effect == Effect::sensor_quantization
-                     ? value >= std::max(e.material, 2.0 * sensors_.resolution_mm)
-                     : is_material(effect, value);
-  // Uncertainty: curvature of the cost along θ from a small secant step (cheap effects), or
-  // from the residual sensitivity between the estimate and the nominal (re-simulated ones),
-  // inflated by the residual correlation.
-  double jj = 0.0;
-  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? e.theta_none : nominal_point_.theta);
-  if (std::abs(d_theta) > 0.0) {
-    for (std::size_t k = 0; k < best.r.size(); ++k) {
-      const double j = (best.r[k] - nominal_point_.r[k]) / d_theta;
-      jj += j * j;
-    }
-  }
-  if (jj > 0.0 && best.r.size() > 1) {
-    const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
-    const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
-    double slope = 1.0;
-    if (effect == Effect::gate_rate_limit) slope = best.theta > 0.0 ? 1.0 / (best.theta * best.theta) : 0.0;
-    if (effect == Effect::friction) slope = std::exp(best.theta);
-    out.parameter.std = theta_sd * slope;
-  }
-  out.significant = out.material && out.score >= o_.min_score && -out.delta_bic >= o_.min_bic_gain;
+  out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
+  out.parameter.value = to_parameter(effect, best.theta);
+  out.parameter.std = parameter_std(effect, best);
+  out.material = is_material(effect, out.parameter.value);
+  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, false});
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
-    // the squared-error cost cannot reward this effect. Its evidence is the lattice: the score is
-    // the lattice coherence of the held-out levels at the step fitted on the first part.
+    // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at
+    // least twice the modelled resolution, and the lattice coherence of the held-out levels at
+    // the step fitted on the first part as the score.
+    const double value = std::max(out.parameter.value, sensors_.resolution_mm);
+    out.parameter.value = value;
+    out.material = value >= std::max(e.material, 2.0 * sensors_.resolution_mm);
     out.score = out.material ? heldout_coherence(value) : 0.0;
     out.significant = out.material && out.score >= 0.9;
   }
@@ -748,20 +299,30 @@ EffectResult Engine::evaluate_candidate(Effect effect) {
   return out;
 }
 
-std::vector<RecordingResiduals> residual_sets(const std::vector<Prepared>& recs, const std::vector<Channels>& model,
-                                              const std::string& primary, double period) {
+const std::vector<Channels>& Engine::prediction_with(const std::string& effect) const {
+  return effect.empty() ? nominal_ : best_.at(effect).prediction;
+}
+
+std::vector<RecordingResiduals> Engine::nominal_residuals() {
+  prepare();
+  simulate_nominal();
+  return residuals_with("");
+}
+
+std::vector<RecordingResiduals> Engine::residuals_with(const std::string& effect) const {
+  const std::vector<Channels>& model = prediction_with(effect);
   std::vector<RecordingResiduals> out;
-  for (std::size_t i = 0; i < recs.size(); ++i) {
-    const Prepared& p = recs[i];
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const Prepared& p = recs_[i];
     RecordingResiduals r;
     r.name = p.name;
     r.operating_point_mm = p.operating_point_mm;
-    r.period_s = period;
+    r.period_s = period_;
     r.t = p.t;
     r.u = p.u;
-    r.level = p.data.at(primary);
+    r.level = p.data.at(o_.primary);
     r.regime = p.regime;
-    r.primary = primary;
+    r.primary = o_.primary;
     for (const auto& [c, y] : p.data) {
       const auto it = model[i].find(c);
       if (it == model[i].end()) continue;
@@ -769,256 +330,65 @@ std::vector<RecordingResiduals> residual_sets(const std::vector<Prepared>& recs,
       for (std::size_t k = 0; k < p.n; ++k) e[k] = y[k] - it->second[k];
       r.residuals[c] = std::move(e);
     }
-    r.nrmse_percent = reduced::nrmse_percent(model[i].at(primary), p.data.at(primary));
+    r.nrmse_percent = reduced::nrmse_percent(model[i].at(o_.primary), p.data.at(o_.primary));
     out.push_back(std::move(r));
   }
   return out;
 }
 
-std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets, const ResidualTestOptions& o) {
-  std::vector<ResidualTests> out;
-  for (const auto& r : sets) out.push_back(residual_tests(r.residuals.at(r.primary), r.u, o));
+std::vector<RecordingSeries> Engine::series_with(const std::string& effect) const {
+  const std::vector<Channels>& corrected = prediction_with(effect);
+  std::vector<RecordingSeries> out;
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const Prepared& p = recs_[i];
+    out.push_back(RecordingSeries{p.name, p.t, p.u, p.data.at(o_.primary), nominal_[i].at(o_.primary),
+                                  corrected[i].at(o_.primary), p.n_fit});
+  }
   return out;
 }
 
-}  // namespace
 
-std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
-  std::vector<std::size_t> changes;
-  for (std::size_t k = 1; k < u.size(); ++k) {
-    if (u[k] != u[k - 1]) changes.push_back(k);
+}  // namespace scenario_engine
+
+
+Status DiagnoseOptions::validate() const {
+  Validator check;
+  check.require(fit_fraction > 0.1 && fit_fraction < 0.9, "fit_fraction", fit_fraction, "(0.1, 0.9)");
+  check.require(!primary.empty(), "primary", "expected a channel name");
+  check.require(primary.empty() || std::find(channels.begin(), channels.end(), primary) != channels.end(),
+                "channels", "must include the primary channel " + primary);
+  check.require(min_score > 0.0 && min_score < 1.0, "min_score", min_score, "(0, 1)");
+  check.require(min_bic_gain >= 0.0, "min_bic_gain", min_bic_gain, ">= 0");
+  check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
+  check.require(max_evaluations >= 2 && max_evaluations <= 50, "max_evaluations", max_evaluations, "2..50");
+  check.require(threads >= 1, "threads", threads, ">= 1");
+  check.require(command_lead_samples >= 0.0 && command_lead_samples <= 1.0, "command_lead_samples",
+                command_lead_samples, "[0, 1]");
+  check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");
+  check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.nested("tests", tests.validate());
+  check.nested("locate", locate.validate());
+  for (const auto& c : candidates) {
+    check.require(effect_from_name(c).has_value(), "candidates",
+                  "unknown effect '" + c + "' (expected one of " + catalog_names() + ")");
   }
-  if (changes.size() < 8 || t.size() < 2) return {};
-  const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
-  double d_min = 1e300;
-  for (std::size_t j = 1; j < changes.size(); ++j) d_min = std::min(d_min, t[changes[j]] - t[changes[j - 1]]);
-  // Every grid point must fall in its change interval (t[k-1], t[k]], widened by a small
-  // tolerance: a switch exactly at a sample instant (0.5 s clock, 0.13 s samples: every 6.5 s)
-  // may show at that sample or the next, depending on rounding in the recorder.
-  const double tol = 0.03 * h;
-  auto feasible = [&](double period, double phase) {
-    for (std::size_t k : changes) {
-      const double m = std::ceil((t[k - 1] - tol - phase) / period);
-      const double s = phase + m * period;
-      if (!(s >= t[k - 1] - tol && s <= t[k] + tol)) return false;
-    }
-    return true;
-  };
-  const std::size_t first = changes.front();
-  std::vector<std::pair<double, double>> found;  // feasible (period, phase)
-  // A period error δ moves the m-th grid point by m δ, so the step must be below the tolerance
-  // divided by the number of periods the changes span (~500 for a 255 s PRBS at 0.5 s).
-  const double span = t[changes.back()] - t[changes.front() - 1];
-  const double period_step = std::max(1e-7, 0.5 * tol * std::max(d_min - h, 0.5 * h) / std::max(span, h));
-  for (double period = std::max(0.5 * h, d_min - h); period <= d_min + h; period += period_step) {
-    for (int i = 0; i <= 80; ++i) {
-      const double phase = t[first - 1] - tol + (h + 2.0 * tol) * i / 80.0;
-      if (feasible(period, phase)) found.emplace_back(period, phase);
-    }
-  }
-  if (found.empty()) return {};
-  // A finer grid can also fit (a few periods shorter than the clock pass by chance); the
-  // longest consistent period is the clock. Its feasible patch is convex: take its centre.
-  const double longest = found.back().first;
-  double sum_period = 0.0, sum_phase = 0.0;
-  int count = 0;
-  for (const auto& [period, phase] : found) {
-    if (longest - period > 1e-3 * longest) continue;
-    sum_period += period;
-    sum_phase += phase;
-    ++count;
-  }
-  const double period = sum_period / count, phase = sum_phase / count;
-  if (!feasible(period, phase)) return {};
-  std::vector<double> out;
-  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
-  return out;
+  return check.status();
 }
 
-std::string DiagnoseOptions::validate() const {
-  std::ostringstream out;
-  if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected (0.1, 0.9)";
-  else if (primary.empty()) out << "primary: expected a channel name";
-  else if (std::find(channels.begin(), channels.end(), primary) == channels.end()) out << "channels: must include the primary channel " << primary;
-  else if (!(min_score > 0.0 && min_score < 1.0)) out << "min_score = " << min_score << ": expected (0, 1)";
-  else if (!(min_bic_gain >= 0.0)) out << "min_bic_gain = " << min_bic_gain << ": expected >= 0";
-  else if (!(none_noise_factor > 0.0)) out << "none_noise_factor = " << none_noise_factor << ": expected > 0";
-  else if (max_evaluations < 2 || max_evaluations > 50) out << "max_evaluations = " << max_evaluations << ": expected 2..50";
-  else if (threads < 1) out << "threads = " << threads << ": expected >= 1";
-  else if (!(command_lead_samples >= 0.0 && command_lead_samples <= 1.0)) out << "command_lead_samples = " << command_lead_samples << ": expected [0, 1]";
-  else if (!(settle_time_s >= 0.0)) out << "settle_time_s = " << settle_time_s << ": expected >= 0";
-  else if (!(warmup_s >= 0.0)) out << "warmup_s = " << warmup_s << ": expected >= 0";
-  else if (const std::string t = tests.validate(); !t.empty()) out << "tests." << t;
-  else if (const std::string l = locate.validate(); !l.empty()) out << "locate." << l;
-  else {
-    for (const auto& c : candidates) {
-      if (!effect_from_name(c)) {
-        out << "candidates: unknown effect '" << c << "' (expected one of " << catalog_names() << ")";
-        break;
-      }
-    }
-  }
-  return out.str();
-}
-
-std::vector<std::string> check_recordings(const Scenario& s, const std::vector<Recording>& recordings) {
-  std::vector<std::string> problems;
-  const scenarios::GateSpec* gate = controlled_gate(s);
-  const double max_mm = gate ? gate->max_opening_m * 1e3 : std::numeric_limits<double>::infinity();
-  const double h = s.sensors.period_s;
-  if (recordings.empty()) problems.push_back("no recordings given");
-  for (const Recording& rec : recordings) {
-    const std::string name = rec.source.empty() ? "recording" : rec.source;
-    std::vector<std::string> missing;
-    for (const char* c : {columns::time, columns::gate_command, columns::level_downstream_end}) {
-      if (!rec.has(c)) missing.push_back(c);
-    }
-    if (!missing.empty()) {
-      std::string list;
-      for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
-      problems.push_back(name + ": missing channel(s) " + list);
-      continue;
-    }
-    if (rec.size() < 50) {
-      problems.push_back(name + ": " + std::to_string(rec.size()) + " samples, expected at least 50");
-      continue;
-    }
-    const double hr = rec.sample_period();
-    if (std::abs(hr - h) > 0.01 * h) {
-      problems.push_back(name + ": sampled every " + format(hr) + " s, but the scenario's sensors sample every " +
-                         format(h) + " s (sensors.period_s)");
-    }
-    for (const char* c : {columns::gate_command, columns::gate_position}) {
-      if (!rec.has(c)) continue;
-      const auto& v = rec.column(c);
-      const auto& t = rec.column(columns::time);
-      for (std::size_t k = 0; k < v.size(); ++k) {
-        if (v[k] < -1e-9 || v[k] > max_mm + 1e-9) {
-          problems.push_back(name + ": " + c + " = " + format(v[k]) + " mm at t = " + format(t[k]) +
-                             " s is outside the controlled gate's range 0.." + format(max_mm) + " mm");
-          break;
-        }
-      }
-    }
-  }
-  if (!gate) problems.push_back(s.source + ": the scenario has no gate with controlled = true to replay the command on");
-  return problems;
-}
-
-void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d) {
-  double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
-  std::size_t n = 0;
-  for (const auto& r : sets) {
-    const double sigma = noise_level(r.level, resolution);
-    noise_sq += sigma * sigma;
-    const auto& e = r.residuals.at(r.primary);
-    rms_sq += std::inner_product(e.begin(), e.end(), e.begin(), 0.0);
-    n += e.size();
-    const double mean = std::accumulate(r.level.begin(), r.level.end(), 0.0) / static_cast<double>(r.level.size());
-    double v = 0.0;
-    for (double y : r.level) v += (y - mean) * (y - mean);
-    spread_sq += v / static_cast<double>(r.level.size());
-  }
-  const auto count = static_cast<double>(std::max<std::size_t>(sets.size(), 1));
-  d.noise = std::sqrt(noise_sq / count);
-  d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
-  d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
-}
-
-bool set_verdict(Diagnosis& d, double none_noise_factor) {
-  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise ||
-                            std::all_of(d.tests_before.begin(), d.tests_before.end(),
-                                        [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
-  if (!d.effects.empty() && d.effects.front().significant) {
-    const EffectResult& w = d.effects.front();
-    d.verdict = w.name;
-    d.reason = w.name == "sensor_quantization"
-                   ? "the held-out levels lie on a " + format(w.parameter.value) + " mm lattice (coherence " +
-                         format(std::round(100.0 * w.score) / 100.0) + ")"
-                   : w.name + " reduces the held-out cost by " + format(std::round(100.0 * w.score)) + "% (" +
-                         w.parameter.name + " = " + format(w.parameter.value) + " " + w.parameter.unit + ")";
-    return true;
-  }
-  if (within_noise) {
-    d.verdict = "none";
-    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) is within the measurement noise (" +
-               format(d.noise) + " mm) and no candidate improves the held-out fit";
-  } else {
-    d.verdict = "unexplained";
-    d.reason = "the nominal residual (RMS " + format(d.nominal_rms) + " mm) exceeds " + format(none_noise_factor) +
-               " x the noise (" + format(d.noise) + " mm) and no candidate improves the held-out fit significantly";
-  }
-  return false;
-}
-
-Diagnosis diagnose(const Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
-  if (const std::string problem = options.validate(); !problem.empty()) throw InputError("diagnose options: " + problem);
+Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
+  if (const Status status = options.validate(); !status) throw InputError("diagnose options: " + status.message());
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
   if (!problems.empty()) {
     std::string all;
     for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
     throw InputError(all);
   }
-  const auto started = std::chrono::steady_clock::now();
-  Diagnosis d;
-  std::vector<Effect> candidates;
-  if (options.candidates.empty()) {
-    for (const auto& e : catalog()) candidates.push_back(e.effect);
-  } else {
-    for (const auto& c : options.candidates) candidates.push_back(*effect_from_name(c));
+  std::vector<std::string> candidates = options.candidates;
+  if (candidates.empty()) {
+    for (const auto& e : catalog()) candidates.emplace_back(e.name);
   }
-  Engine engine(scenario, options);
-  // Progress: simulations counted against a rough budget (nominal + ~5 per re-simulated effect).
-  std::size_t done = 0;
-  std::string stage = "nominal";
-  std::mutex progress_mutex;
-  const double budget = static_cast<double>(recordings.size()) * (1.0 + 5.0 * static_cast<double>(candidates.size()));
-  engine.on_simulation = [&](const std::string&) {
-    if (!options.progress) return;
-    const std::lock_guard lock(progress_mutex);
-    ++done;
-    options.progress(std::min(0.99, static_cast<double>(done) / budget), stage);
-  };
-  try {
-    engine.prepare(recordings);
-    if (!engine.recordings().empty() && !engine.recordings().front().data.count(options.primary)) {
-      throw InputError(engine.recordings().front().name + ": missing the primary channel " + options.primary);
-    }
-    engine.simulate_nominal();
-    const auto before_sets = residual_sets(engine.recordings(), engine.nominal(), options.primary, engine.period());
-    d.mismatch = locate(before_sets, options.locate);
-    d.tests_before = tests_of(before_sets, options.tests);
-    d.channel_scale = engine.scale();
-    set_noise_figures(before_sets, engine.base_resolution(), d);
-
-    for (Effect effect : candidates) {
-      stage = info(effect).name;
-      d.effects.push_back(engine.evaluate_candidate(effect));
-    }
-    std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-      if (a.significant != b.significant) return a.significant;
-      return a.score > b.score;
-    });
-    std::vector<Channels> corrected = engine.nominal();
-    if (set_verdict(d, options.none_noise_factor)) corrected = engine.best_point(d.verdict)->prediction;
-    const auto after_sets = residual_sets(engine.recordings(), corrected, options.primary, engine.period());
-    d.mismatch_after = locate(after_sets, options.locate);
-    d.tests_after = tests_of(after_sets, options.tests);
-    for (std::size_t i = 0; i < engine.recordings().size(); ++i) {
-      const Prepared& p = engine.recordings()[i];
-      d.series.push_back(RecordingSeries{p.name, p.t, p.u, p.data.at(options.primary),
-                                         engine.nominal()[i].at(options.primary), corrected[i].at(options.primary),
-                                         p.n_fit});
-    }
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    d.ok = false;
-    d.message = e.what();
-  }
-  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (options.progress) options.progress(1.0, "done");
-  return d;
+  scenario_engine::Engine engine(scenario, recordings, options);
+  return run_pipeline(engine, candidates, {options.none_noise_factor, options.tests, options.locate, options.progress});
 }
 
 }  // namespace canalsim::diagnosis

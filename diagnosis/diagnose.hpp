@@ -25,7 +25,10 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
+#include "calibration/replay.hpp"
 #include "diagnosis/catalog.hpp"
+#include "diagnosis/pipeline.hpp"
 #include "diagnosis/locate.hpp"
 #include "diagnosis/residual_tests.hpp"
 #include "core/recording.hpp"
@@ -61,76 +64,15 @@ struct DiagnoseOptions {
   double warmup_s = 10.0;        // [0, a third of the shortest recording]
   ResidualTestOptions tests;
   LocateOptions locate;
-  // Called with (fraction done, what is running).
-  std::function<void(double, const std::string&)> progress;
-  [[nodiscard]] std::string validate() const;
+  ProgressCallback progress;  // share of the simulations done, and the stage
+
+  Status validate() const;
 };
 
-struct ParameterEstimate {
-  std::string name;
-  std::string unit;
-  double value = 0.0;
-  double std = 0.0;   // one standard deviation; 0 when the cost was flat or at a bound
-};
-
-struct EffectResult {
-  std::string name;
-  double score = 0.0;            // relative held-out cost reduction (1 = perfect, < 0 = worse)
-  bool significant = false;
-  bool material = false;
-  ParameterEstimate parameter;
-  double nrmse_before = 0.0, nrmse_after = 0.0;                  // primary, fitted part, mean over recordings
-  double heldout_nrmse_before = 0.0, heldout_nrmse_after = 0.0;  // primary, held-out part
-  double cost_before = 0.0, cost_after = 0.0;                    // channel-balanced, fitted part
-  double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
-  double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
-  int simulations = 0;           // re-simulations spent on the fit
-  std::string note;              // why it was skipped, if it was
-};
-
-// Per-recording series for plots (primary channel, mm).
-struct RecordingSeries {
-  std::string name;
-  std::vector<double> t, u, recorded, nominal, corrected;
-  std::size_t fit_samples = 0;
-};
-
-struct Diagnosis {
-  bool ok = true;
-  std::string message;           // numerical failure (a simulation that did not run), when !ok
-  std::string verdict;           // none | unexplained | an effect name
-  std::string reason;            // one sentence on how the verdict was reached
-  std::vector<EffectResult> effects;   // ranked, best first
-  Mismatch mismatch;             // of the nominal model
-  Mismatch mismatch_after;       // with the winner (equals mismatch when there is none)
-  std::vector<ResidualTests> tests_before, tests_after;  // per recording, primary channel
-  double noise = 0.0;            // estimated measurement noise of the primary channel [mm]
-  double noise_limit_nrmse = 0.0;  // Nrmse a perfect model would reach given that noise
-  double nominal_rms = 0.0;      // primary residual RMS of the nominal model [mm]
-  std::vector<RecordingSeries> series;
-  std::map<std::string, double> channel_scale;  // s_c of the cost weights
-  double seconds = 0.0;
-};
-
-// The instants at which a sampled, clocked command changed: if one clock (period T, phase t0)
-// puts a grid point inside every interval (t[k-1], t[k]] where u changes, the grid points;
-// otherwise empty. Periods are searched near the shortest spacing between changes.
-std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u);
-
-// Problems that make recordings unusable with the scenario, one line each naming the recording:
-// sampling period different from the scenario's sensors, missing channels, gate commands or
-// positions outside the controlled gate's range, too few samples. Empty when all are usable.
-std::vector<std::string> check_recordings(const scenarios::Scenario& scenario,
-                                          const std::vector<Recording>& recordings);
-
-// Noise of the primary channel estimated from the recordings themselves, the nominal residual RMS
-// and the Nrmse a perfect model would reach given that noise (fields of `d`).
-void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d);
-
-// Verdict and reason from the ranked effects and the nominal residual tests: the first effect
-// when it is significant (returns true); else `none` when the nominal residual is within
-// none_noise_factor × the noise or passes the residual tests; else `unexplained`.
-bool set_verdict(Diagnosis& d, double none_noise_factor);
+// Re-exported from the replay machinery (calibration/replay.hpp): the reconstructed switching
+// instants of a clocked command, and the problems that make recordings unusable with a scenario.
+using calibration::command_switch_times;
+using calibration::check_recordings;
 
 // Runs the diagnosis. Throws InputError (all problems of check_recordings, or invalid options);
 // a simulation failure is returned as ok = false with the message.

@@ -143,22 +143,22 @@ std::vector<MismatchWindow> windows_of(const RecordingResiduals& r, const Sample
 
 }  // namespace
 
-std::string LocateOptions::validate() const {
-  std::ostringstream out;
-  if (!(window_s > 0.0 && window_s <= 600.0)) out << "window_s = " << window_s << ": expected (0, 600]";
-  else if (!(window_threshold > 0.0)) out << "window_threshold = " << window_threshold << ": expected > 0";
-  else if (!(move_horizon_s >= 0.0)) out << "move_horizon_s = " << move_horizon_s << ": expected >= 0";
-  else if (fir_order < 2 || fir_order > 1000) out << "fir_order = " << fir_order << ": expected 2..1000";
-  else if (!(band_z > 0.0)) out << "band_z = " << band_z << ": expected > 0";
-  else if (frequency_points < 8) out << "frequency_points = " << frequency_points << ": expected >= 8";
-  else if (max_windows < 1) out << "max_windows = " << max_windows << ": expected >= 1";
-  return out.str();
+Status LocateOptions::validate() const {
+  Validator check;
+  check.require(window_s > 0.0 && window_s <= 600.0, "window_s", window_s, "(0, 600]");
+  check.require(window_threshold > 0.0, "window_threshold", window_threshold, "> 0");
+  check.require(move_horizon_s >= 0.0, "move_horizon_s", move_horizon_s, ">= 0");
+  check.require(!(fir_order < 2 || fir_order > 1000), "fir_order", fir_order, "2..1000");
+  check.require(band_z > 0.0, "band_z", band_z, "> 0");
+  check.require(!(frequency_points < 8), "frequency_points", frequency_points, ">= 8");
+  check.require(!(max_windows < 1), "max_windows", max_windows, ">= 1");
+  return check.status();
 }
 
 FrequencyBand model_error_band(const std::vector<std::vector<double>>& inputs,
                                const std::vector<std::vector<double>>& residuals, double period_s,
                                const LocateOptions& o) {
-  if (const std::string problem = o.validate(); !problem.empty()) throw std::invalid_argument("locate options: " + problem);
+  if (const Status status = o.validate(); !status) throw std::invalid_argument("locate options: " + status.message());
   if (inputs.size() != residuals.size()) throw std::invalid_argument("model_error_band: input and residual counts differ");
   const auto m = static_cast<std::size_t>(o.fir_order);
   std::size_t rows = 0;
@@ -235,7 +235,7 @@ FrequencyBand model_error_band(const std::vector<std::vector<double>>& inputs,
 }
 
 Mismatch locate(const std::vector<RecordingResiduals>& recs, const LocateOptions& o) {
-  if (const std::string problem = o.validate(); !problem.empty()) throw std::invalid_argument("locate options: " + problem);
+  if (const Status status = o.validate(); !status) throw std::invalid_argument("locate options: " + status.message());
   Mismatch out;
   Groups regime, event, level;
   regime.declare("free");

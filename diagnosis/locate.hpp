@@ -11,6 +11,8 @@
 // 99% region z·sd. The reported band is the contiguous stretch with the largest excess.
 #pragma once
 
+#include "core/status.hpp"
+
 #include <map>
 #include <string>
 #include <vector>
@@ -25,7 +27,7 @@ struct LocateOptions {
   double band_z = 2.58;           // confidence of the band (99%); > 0
   int frequency_points = 200;     // frequency grid from 0 to Nyquist; >= 8
   int max_windows = 12;           // windows reported; >= 1
-  [[nodiscard]] std::string validate() const;
+  Status validate() const;
 };
 
 // Residuals of one recording, as the locator needs them (all vectors of the recording's length).

@@ -1,5 +1,7 @@
 #include "diagnosis/model_diagnosis.hpp"
 
+#include "core/format.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
@@ -27,11 +29,6 @@ constexpr const char* kUpstream = "upstream_level_variation";
 constexpr const char* kRegime = "flow_regime_switch";
 constexpr const char* kWave = "wave_resonance";
 
-std::string format(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 // Free-flow share of the samples by the paper's condition (8), with the gate position where it
 // was recorded and the command otherwise.
@@ -169,13 +166,10 @@ class ModelEngine {
     r.heldout_cost_before = nominal_scores_.heldout_mse;
     r.heldout_cost_after = after.heldout_mse;
     r.score = 1.0 - after.heldout_mse / std::max(nominal_scores_.heldout_mse, 1e-300);
-    const double n_eff = effective_fit_samples();
-    r.delta_bic = n_eff * std::log(std::max(after.fit_mse, 1e-300) / std::max(nominal_scores_.fit_mse, 1e-300)) +
-                  extra * std::log(n_eff);
+    r.delta_bic = bic_change(effective_fit_samples(), nominal_scores_.fit_mse, after.fit_mse, extra);
     // "Show the fit improve": the held-out Nrmse (mean over recordings) must rise too — the pooled
     // squared residual can fall through one recording while the others get worse.
-    r.significant = material && r.score >= o_.min_score && -r.delta_bic >= o_.min_bic_gain &&
-                    r.heldout_nrmse_after > r.heldout_nrmse_before;
+    r.significant = is_significant(r, {o_.min_score, o_.min_bic_gain, true});
     judged_[name] = p;
     return r;
   }
@@ -298,7 +292,7 @@ EffectResult sensor_quantization(const ModelEngine& e) {
   if (r == 0.0) return not_expressible("sensor_quantization", "the recorded levels lie on no lattice");
   if (r <= 1.5 * modelled) {
     return not_expressible("sensor_quantization",
-                           "the recorded lattice (" + format(r) + " mm) is the modelled resolution");
+                           "the recorded lattice (" + format_g(r) + " mm) is the modelled resolution");
   }
   // The corrected prediction is the nominal model's level read by the coarser sensor: its
   // expected reading given the model's own spread (catalog.hpp, expected_reading; docs/diagnosis.md
@@ -354,7 +348,7 @@ EffectResult flow_regime_switch(const ModelEngine& e) {
   const double share = free_share(e.data());
   if (share < 0.05 || share > 0.95) {
     return not_expressible(kRegime, "the recordings stay in one regime (free flow in " +
-                                        format(std::round(100.0 * share)) + "% of the samples)");
+                                        format_g(std::round(100.0 * share)) + "% of the samples)");
   }
   Model m = e.fit_kind(ModelKind::hybrid);
   const int extra = static_cast<int>(reduced::parameter_names(ModelKind::hybrid).size() -
@@ -490,6 +484,39 @@ std::vector<RecordingResiduals> residual_sets(const ModelEngine& e, const Predic
   return out;
 }
 
+// The reduced-model half of the pipeline (pipeline.hpp).
+class ModelExplainer final : public Explainer {
+ public:
+  ModelExplainer(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& options)
+      : engine_(recordings, options) {}
+
+  std::vector<RecordingResiduals> nominal_residuals() override {
+    engine_.fit_nominal();
+    return residual_sets(engine_, engine_.nominal_predictions());
+  }
+  double sensor_resolution() const override { return engine_.options().quantum_mm; }
+  EffectResult explain(const std::string& candidate) override { return evaluate(candidate, engine_); }
+  std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override {
+    return residual_sets(engine_, prediction_with(effect));
+  }
+  std::vector<RecordingSeries> series_with(const std::string& effect) const override {
+    const Predictions& corrected = prediction_with(effect);
+    std::vector<RecordingSeries> out;
+    for (std::size_t i = 0; i < engine_.data().size(); ++i) {
+      const auto& data = engine_.data()[i];
+      out.push_back(RecordingSeries{data.source, data.t_s, data.u_mm, data.y_dwe_mm,
+                                    engine_.nominal_predictions()[i], corrected[i], engine_.splits()[i].n_fit});
+    }
+    return out;
+  }
+
+ private:
+  const Predictions& prediction_with(const std::string& effect) const {
+    return effect.empty() ? engine_.nominal_predictions() : engine_.predictions_of(effect);
+  }
+  ModelEngine engine_;
+};
+
 }  // namespace
 
 std::vector<std::string> model_effect_names() {
@@ -501,29 +528,25 @@ std::vector<std::string> model_effect_names() {
   return names;
 }
 
-std::string ModelDiagnoseOptions::validate() const {
-  std::ostringstream out;
-  if (!(fit_fraction > 0.1 && fit_fraction < 0.9)) out << "fit_fraction = " << fit_fraction << ": expected in (0.1, 0.9)";
-  else if (!(min_score > 0.0 && min_score < 1.0)) out << "min_score = " << min_score << ": expected in (0, 1)";
-  else if (!(min_bic_gain >= 0.0)) out << "min_bic_gain = " << min_bic_gain << ": expected >= 0";
-  else if (!(none_noise_factor > 0.0)) out << "none_noise_factor = " << none_noise_factor << ": expected > 0";
-  else if (!(warmup_s >= 0.0)) out << "warmup_s = " << warmup_s << ": expected >= 0";
-  else if (!(quantum_mm >= 0.0)) out << "quantum_mm = " << quantum_mm << ": expected >= 0";
-  else if (!(gate_speed_mm_s >= 0.0)) out << "gate_speed_mm_s = " << gate_speed_mm_s << ": expected >= 0";
-  else if (const auto why = tests.validate(); !why.empty()) out << "tests." << why;
-  else if (const auto why2 = locate.validate(); !why2.empty()) out << "locate." << why2;
-  else {
-    const auto known = model_effect_names();
-    for (const auto& c : candidates) {
-      if (std::find(known.begin(), known.end(), c) == known.end()) {
-        std::string names;
-        for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
-        out << "candidates: unknown effect '" << c << "' (expected one of " << names << ")";
-        break;
-      }
-    }
+Status ModelDiagnoseOptions::validate() const {
+  Validator check;
+  check.require(fit_fraction > 0.1 && fit_fraction < 0.9, "fit_fraction", fit_fraction, "in (0.1, 0.9)");
+  check.require(min_score > 0.0 && min_score < 1.0, "min_score", min_score, "in (0, 1)");
+  check.require(min_bic_gain >= 0.0, "min_bic_gain", min_bic_gain, ">= 0");
+  check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
+  check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.require(quantum_mm >= 0.0, "quantum_mm", quantum_mm, ">= 0");
+  check.require(gate_speed_mm_s >= 0.0, "gate_speed_mm_s", gate_speed_mm_s, ">= 0");
+  check.nested("tests", tests.validate());
+  check.nested("locate", locate.validate());
+  const auto known = model_effect_names();
+  std::string names;
+  for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
+  for (const auto& c : candidates) {
+    check.require(std::find(known.begin(), known.end(), c) != known.end(), "candidates",
+                  "unknown effect '" + c + "' (expected one of " + names + ")");
   }
-  return out.str();
+  return check.status();
 }
 
 ModeResponse damped_mode_response(const std::vector<double>& x, double h, double frequency_hz, double damping) {
@@ -550,51 +573,11 @@ ModeResponse damped_mode_response(const std::vector<double>& x, double h, double
 }
 
 Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& options) {
-  if (const auto why = options.validate(); !why.empty()) throw InputError("diagnose --model: " + why);
+  if (const Status status = options.validate(); !status) throw InputError("diagnose --model: " + status.message());
   if (recordings.empty()) throw InputError("diagnose --model: no recordings");
-  const auto started = std::chrono::steady_clock::now();
-  std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
-  auto progress = [&](double f, const std::string& what) {
-    if (options.progress) options.progress(f, what);
-  };
-  Diagnosis d;
-  ModelEngine engine(recordings, options);  // throws InputError naming a recording it cannot use
-  try {
-    progress(0.0, "nominal " + reduced::model_name(options.kind));
-    engine.fit_nominal();
-    const auto before = residual_sets(engine, engine.nominal_predictions());
-    d.mismatch = locate(before, options.locate);
-    for (const auto& r : before) d.tests_before.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
-    set_noise_figures(before, options.quantum_mm, d);
-
-    for (std::size_t i = 0; i < candidates.size(); ++i) {
-      progress(0.1 + 0.85 * static_cast<double>(i) / static_cast<double>(candidates.size()), candidates[i]);
-      d.effects.push_back(evaluate(candidates[i], engine));
-    }
-    std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-      if (a.significant != b.significant) return a.significant;
-      if (a.note.empty() != b.note.empty()) return a.note.empty();
-      return a.score > b.score;
-    });
-    Predictions corrected = engine.nominal_predictions();
-    if (set_verdict(d, options.none_noise_factor)) corrected = engine.predictions_of(d.verdict);
-    const auto after = residual_sets(engine, corrected);
-    d.mismatch_after = locate(after, options.locate);
-    for (const auto& r : after) d.tests_after.push_back(residual_tests(r.residuals.at(r.primary), r.u, options.tests));
-    for (std::size_t i = 0; i < engine.data().size(); ++i) {
-      const auto& data = engine.data()[i];
-      d.series.push_back(RecordingSeries{data.source, data.t_s, data.u_mm, data.y_dwe_mm,
-                                         engine.nominal_predictions()[i], corrected[i], engine.splits()[i].n_fit});
-    }
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    d.ok = false;
-    d.message = e.what();
-  }
-  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  progress(1.0, "done");
-  return d;
+  const std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
+  ModelExplainer explainer(recordings, options);  // throws InputError naming a recording it cannot use
+  return run_pipeline(explainer, candidates, {options.none_noise_factor, options.tests, options.locate, options.progress});
 }
 
 }  // namespace canalsim::diagnosis

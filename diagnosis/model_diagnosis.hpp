@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "reduced_models/data.hpp"
 #include "reduced_models/models.hpp"
@@ -49,8 +50,8 @@ struct ModelDiagnoseOptions {
   reduced::DataOptions data;            // operating point, constant upstream level
   ResidualTestOptions tests;
   LocateOptions locate;
-  std::function<void(double, const std::string&)> progress;
-  [[nodiscard]] std::string validate() const;
+  ProgressCallback progress;
+  Status validate() const;
 };
 
 // The effect names `diagnose --model` knows: the scenario catalog's and the three of reduced

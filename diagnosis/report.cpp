@@ -1,5 +1,8 @@
 #include "diagnosis/report.hpp"
 
+#include "core/format.hpp"
+#include "core/html.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -46,26 +49,8 @@ json mismatch_json(const Mismatch& m) {
               {"by_level", groups(m.by_level)}, {"by_channel", by_channel}};
 }
 
-std::string esc(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-std::string fixed(double v, int digits = 3) {
-  if (!std::isfinite(v)) return "-";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
+// A figure of the report; "-" where there is none.
+std::string fixed(double v, int digits = 3) { return std::isfinite(v) ? format_fixed(v, digits) : "-"; }
 
 struct Line {
   const std::vector<double>* y;
@@ -111,7 +96,7 @@ std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& line
       << fixed(tv, 0) << "</text>";
   }
   s << "<text x='12' y='" << top + 100 << "' font-size='11' transform='rotate(-90 12 " << top + 100 << ")'>"
-    << esc(y_label) << "</text><text x='" << width / 2 << "' y='" << height - 1
+    << html::escape(y_label) << "</text><text x='" << width / 2 << "' y='" << height - 1
     << "' font-size='11' text-anchor='middle'>t [s]</text>";
   const std::size_t stride = std::max<std::size_t>(1, t.size() / 1500);
   double legend_x = left + 8;
@@ -119,7 +104,7 @@ std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& line
     s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
     for (std::size_t k = 0; k < t.size(); k += stride) s << fixed(X(t[k]), 1) << ',' << fixed(Y((*l.y)[k]), 1) << ' ';
     s << "'/><text x='" << fixed(legend_x, 1) << "' y='" << height - bottom - 6 << "' font-size='11' fill='"
-      << l.colour << "'>" << esc(l.label) << "</text>";
+      << l.colour << "'>" << html::escape(l.label) << "</text>";
     legend_x += 9.0 * static_cast<double>(l.label.size()) + 20.0;
   }
   s << "</svg>\n";
@@ -219,24 +204,24 @@ std::string text_summary(const Diagnosis& d) {
 
 std::string html_report(const Diagnosis& d, const std::string& title) {
   std::ostringstream s;
-  s << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << esc(title)
+  s << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << html::escape(title)
     << "</title><style>body{font-family:sans-serif;max-width:960px;margin:auto;padding:1em}"
        "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
        "td:first-child,th:first-child{text-align:left}.sig{background:#e6f4e6}</style></head><body>";
-  s << "<h1>" << esc(title) << "</h1>";
+  s << "<h1>" << html::escape(title) << "</h1>";
   if (!d.ok) {
-    s << "<p>Diagnosis failed: " << esc(d.message) << "</p></body></html>\n";
+    s << "<p>Diagnosis failed: " << html::escape(d.message) << "</p></body></html>\n";
     return s.str();
   }
-  s << "<h2>Verdict: " << esc(d.verdict) << "</h2><p>" << esc(d.reason) << ".</p>";
+  s << "<h2>Verdict: " << html::escape(d.verdict) << "</h2><p>" << html::escape(d.reason) << ".</p>";
   s << "<p>Measurement noise " << fixed(d.noise) << " mm; nominal residual RMS " << fixed(d.nominal_rms)
     << " mm; a perfect model would reach Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%.</p>";
   s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>parameter</th><th>Nrmse fitted</th>"
        "<th>after</th><th>Nrmse held-out</th><th>after</th><th>&#916;BIC</th></tr>";
   for (const auto& e : d.effects) {
-    s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << esc(e.name) << "</td><td>" << fixed(e.score)
-      << "</td><td>" << esc(e.parameter.name) << " = " << fixed(e.parameter.value) << " &#177; "
-      << fixed(e.parameter.std) << ' ' << esc(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
+    s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << html::escape(e.name) << "</td><td>" << fixed(e.score)
+      << "</td><td>" << html::escape(e.parameter.name) << " = " << fixed(e.parameter.value) << " &#177; "
+      << fixed(e.parameter.std) << ' ' << html::escape(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
       << "</td><td>" << fixed(e.nrmse_after, 2) << "</td><td>" << fixed(e.heldout_nrmse_before, 2) << "</td><td>"
       << fixed(e.heldout_nrmse_after, 2) << "</td><td>" << fixed(e.delta_bic, 0) << "</td></tr>";
   }
@@ -259,18 +244,18 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
   for (std::size_t i = 0; i < d.mismatch.by_recording.size(); ++i) {
     const auto& b = d.mismatch.by_recording[i];
     const auto& a = d.mismatch_after.by_recording[i];
-    s << "<tr><td>" << esc(b.name) << "</td><td>" << fixed(b.operating_point_mm, 1) << "</td><td>"
+    s << "<tr><td>" << html::escape(b.name) << "</td><td>" << fixed(b.operating_point_mm, 1) << "</td><td>"
       << fixed(b.nrmse_percent, 2) << "</td><td>" << fixed(a.nrmse_percent, 2) << "</td><td>" << fixed(b.rms)
       << "</td><td>" << fixed(a.rms) << "</td><td>" << (b.white ? "yes" : "no") << " / " << (a.white ? "yes" : "no")
       << "</td></tr>";
   }
   s << "</table><p>By regime:";
   for (const auto& g : d.mismatch.by_regime) {
-    if (g.samples) s << ' ' << esc(g.name) << " RMS " << fixed(g.rms) << " mm (" << g.samples << " samples);";
+    if (g.samples) s << ' ' << html::escape(g.name) << " RMS " << fixed(g.rms) << " mm (" << g.samples << " samples);";
   }
   s << " by event:";
   for (const auto& g : d.mismatch.by_event) {
-    if (g.samples) s << ' ' << esc(g.name) << ' ' << fixed(g.rms) << " mm;";
+    if (g.samples) s << ' ' << html::escape(g.name) << ' ' << fixed(g.rms) << " mm;";
   }
   s << "</p>";
   for (const auto& r : d.series) {
@@ -284,7 +269,7 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
       after[k] = r.recorded[k] - r.corrected[k];
     }
     const double split = r.fit_samples < r.t.size() ? r.t[r.fit_samples] : r.t.back();
-    s << "<h3>" << esc(r.name) << "</h3>";
+    s << "<h3>" << html::escape(r.name) << "</h3>";
     s << svg_plot(r.t, {{&r.recorded, "#000", "recorded"}, {&r.nominal, "#1f77b4", "nominal"},
                         {&r.corrected, "#d62728", "corrected"}},
                   spans, "level [mm]", split);

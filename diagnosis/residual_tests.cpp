@@ -36,12 +36,12 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-std::string ResidualTestOptions::validate() const {
-  std::ostringstream out;
-  if (!(max_lag >= 1 && max_lag <= 1000)) out << "max_lag = " << max_lag << ": expected 1..1000";
-  else if (!(z > 0.0 && z <= 10.0)) out << "z = " << z << ": expected (0, 10]";
-  else if (!(family_level > 0.0 && family_level < 1.0)) out << "family_level = " << family_level << ": expected (0, 1)";
-  return out.str();
+Status ResidualTestOptions::validate() const {
+  Validator check;
+  check.require(max_lag >= 1 && max_lag <= 1000, "max_lag", max_lag, "1..1000");
+  check.require(z > 0.0 && z <= 10.0, "z", z, "(0, 10]");
+  check.require(family_level > 0.0 && family_level < 1.0, "family_level", family_level, "(0, 1)");
+  return check.status();
 }
 
 std::vector<double> autocorrelation(const std::vector<double>& e, int max_lag) {
@@ -87,8 +87,8 @@ int binomial_allowance(int n, double p, double level) {
 
 ResidualTests residual_tests(const std::vector<double>& residual, const std::vector<double>& input,
                              const ResidualTestOptions& options) {
-  if (const std::string problem = options.validate(); !problem.empty()) {
-    throw std::invalid_argument("residual test options: " + problem);
+  if (const Status status = options.validate(); !status) {
+    throw std::invalid_argument("residual test options: " + status.message());
   }
   if (!input.empty() && input.size() != residual.size()) {
     throw std::invalid_argument("residual_tests: input and residual lengths differ");

@@ -11,6 +11,8 @@
 // exceeds with probability 5% (so "one lag of 25 outside" is not a failure).
 #pragma once
 
+#include "core/status.hpp"
+
 #include <string>
 #include <vector>
 
@@ -21,7 +23,7 @@ struct ResidualTestOptions {
   double z = 2.58;           // band half-width in standard deviations (99%); range (0, 10]
   double family_level = 0.05;  // allowed probability of a false "not white" over all lags; (0, 1)
   // Empty when valid; otherwise one line naming the field and its range.
-  [[nodiscard]] std::string validate() const;
+  Status validate() const;
 };
 
 struct CorrelationTest {

@@ -1,5 +1,7 @@
 #include "reduced_models/data.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <cstdlib>
 #include <cmath>
@@ -18,17 +20,12 @@ std::optional<double> operating_point_mm(const Recording& recording) {
   return value;
 }
 
-std::string number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 }  // namespace
 
 std::string DataOptions::validate() const {
   if (upstream_level_mm && !(std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0)) {
-    return "DataOptions.upstream_level_mm: " + number(*upstream_level_mm) +
+    return "DataOptions.upstream_level_mm: " + format_g(*upstream_level_mm) +
            ", expected a positive level in mm";
   }
   if (u0_mm && !std::isfinite(*u0_mm)) return "DataOptions.u0_mm: expected a finite value";
@@ -61,13 +58,13 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
 
   const auto [umin, umax] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
   if (*umax - *umin <= options.min_excitation_mm) {
-    throw InputError(source + ": u_mm is constant (" + number(*umin) +
+    throw InputError(source + ": u_mm is constant (" + format_g(*umin) +
                      " mm): the input has no excitation, so no model can be identified "
                      "(expected e.g. a PRBS around the operating point)");
   }
   const auto [ymin, ymax] = std::minmax_element(d.y_dwe_mm.begin(), d.y_dwe_mm.end());
   if (*ymax == *ymin) {
-    throw InputError(source + ": y_dwe_mm is constant (" + number(*ymin) +
+    throw InputError(source + ": y_dwe_mm is constant (" + format_g(*ymin) +
                      " mm in every row): the level never responds to the input, so no model can be "
                      "identified and the Nrmse (eq. 19) is undefined (expected the recorded downstream level)");
   }

@@ -19,12 +19,12 @@
 // the γ with the best Nrmse (eq. 19), as in the paper's Figures 8 and 10.
 #pragma once
 
-#include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "reduced_models/data.hpp"
 #include "reduced_models/metrics.hpp"
 #include "reduced_models/models.hpp"
@@ -74,8 +74,8 @@ struct FitOptions {
   double head_ref_sub_mm = 0.0;
   // Worker threads for fit_each() and gamma_sweep() (the machine has 2 cores).
   unsigned threads = 2;
-  // Called with one-line progress messages by the longer operations (may be empty).
-  std::function<void(const std::string&)> progress;
+  // Progress of fit_each() and gamma_sweep() (may be empty); called from one thread at a time.
+  ProgressCallback progress;
 
   // Empty when valid; otherwise one line naming the field (e.g. "bounds.T: lower 5 > upper 1
   // excludes every model").

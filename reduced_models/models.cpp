@@ -1,5 +1,7 @@
 #include "reduced_models/models.hpp"
 
+#include "core/format.hpp"
+
 #include "core/laws.hpp"
 
 #include <algorithm>
@@ -13,11 +15,6 @@
 namespace canalsim::reduced {
 namespace {
 
-std::string number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 double mean_free_head(const ExperimentData& d) {
   double s = 0.0;
@@ -87,10 +84,10 @@ bool is_linear_time_invariant(ModelKind kind) { return !uses_upstream_level(kind
 
 std::string Actuation::validate() const {
   if (!(gate_speed_mm_s >= 0.0) || !std::isfinite(gate_speed_mm_s)) {
-    return "Actuation.gate_speed_mm_s: " + number(gate_speed_mm_s) + ", expected >= 0 (0 = off)";
+    return "Actuation.gate_speed_mm_s: " + format_g(gate_speed_mm_s) + ", expected >= 0 (0 = off)";
   }
   if (!(quantum_mm >= 0.0) || !std::isfinite(quantum_mm)) {
-    return "Actuation.quantum_mm: " + number(quantum_mm) + ", expected >= 0 (0 = off)";
+    return "Actuation.quantum_mm: " + format_g(quantum_mm) + ", expected >= 0 (0 = off)";
   }
   return "";
 }
@@ -138,14 +135,14 @@ std::string validate(const Model& model) {
   for (const auto& name : parameter_names(model.kind)) {
     if (!std::isfinite(get_parameter(p, name))) return "parameter " + name + " is not finite";
   }
-  if (!(p.T >= 0.0)) return "parameter T: " + number(p.T) + " s, expected >= 0";
+  if (!(p.T >= 0.0)) return "parameter T: " + format_g(p.T) + " s, expected >= 0";
   if (model.kind == ModelKind::sopd && !(p.T2 >= 0.0)) {
-    return "parameter T2: " + number(p.T2) + " s, expected >= 0";
+    return "parameter T2: " + format_g(p.T2) + " s, expected >= 0";
   }
   if (is_fractional(model.kind) && !(p.lambda > 0.0)) {
-    return "parameter lambda: " + number(p.lambda) + ", expected > 0";
+    return "parameter lambda: " + format_g(p.lambda) + ", expected > 0";
   }
-  if (!(p.L >= 0.0)) return "parameter L: " + number(p.L) + " s, expected >= 0";
+  if (!(p.L >= 0.0)) return "parameter L: " + format_g(p.L) + " s, expected >= 0";
   if (!(p.head_ref_mm >= 0.0)) return "parameter head_ref_mm: expected >= 0 (0 = from data)";
   if (!(p.head_ref_sub_mm >= 0.0)) return "parameter head_ref_sub_mm: expected >= 0";
   return model.actuation.validate();

@@ -1,5 +1,7 @@
 #include "scenarios/simulate.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,11 +22,6 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-std::string format_number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
 
 solver::SolverOptions solver_options(const NumericsSpec& n) {
   solver::SolverOptions o;
@@ -378,7 +375,7 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
       march_to(b.canal, -marching + marching * k / 20.0, guard, "settling");
       report(result.progress_weight * k / 20.0);
     }
-    const std::string marched = "time marching " + format_number(marching) + " s";
+    const std::string marched = "time marching " + format_g(marching) + " s";
     result.description = solved ? result.description + ", then " + marched
                                 : marched + (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
   }
@@ -400,7 +397,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   // Start from the steady state of the operating point (the command holds its t = 0 value before
   // t = 0): Newton on the discretised equations, or time marching if that fails or is not wanted.
   const auto report = [&](double fraction) {
-    if (options.progress) options.progress(std::clamp(fraction, 0.0, 1.0));
+    if (options.progress) options.progress({std::clamp(fraction, 0.0, 1.0), ""});
   };
   report(0.0);
   RunCostGuard guard(s, e, options.allow_long_run);
@@ -498,8 +495,8 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.source = s.name + "/" + e.name;
   rec.set_meta("scenario", s.name);
   rec.set_meta("experiment", e.name);
-  rec.set_meta("operating_opening_mm", format_number(e.operating_opening_mm));
-  rec.set_meta("sampling_period_s", format_number(h));
+  rec.set_meta("operating_opening_mm", format_g(e.operating_opening_mm));
+  rec.set_meta("sampling_period_s", format_g(h));
   rec.set_meta("generator", "canalsim simulate");
   rec.set_meta("initial_state", initial.description);
   record_run_report(rec, b.canal.total_balance(), b.canal.time(), walls);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gates/structures.hpp"
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 #include "solver/canal.hpp"
@@ -71,7 +72,7 @@ struct Drive {
 
 struct SimulateOptions {
   // Called with the fraction done in [0, 1], about every 1% of the run.
-  std::function<void(double)> progress;
+  ProgressCallback progress;
   Drive drive;
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;

@@ -6,11 +6,12 @@
 #include <random>
 
 #include "reduced_models/identification.hpp"
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace {
 
 using namespace canalsim::reduced;
+namespace testing = canalsim::testing;
 
 ExperimentData lfom_data(std::size_t n) {
   Model truth{ModelKind::lfom, {}, {}};

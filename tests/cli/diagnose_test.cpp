@@ -2,7 +2,7 @@
 // non-zero exit, and writes no output file.
 #include <gtest/gtest.h>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

@@ -2,7 +2,7 @@
 // uncertainty index of a parameter whose nominal value is 0 is printed as undefined, not inf%.
 #include <gtest/gtest.h>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

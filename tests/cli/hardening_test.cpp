@@ -7,7 +7,7 @@
 #include <map>
 #include <regex>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

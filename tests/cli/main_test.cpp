@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

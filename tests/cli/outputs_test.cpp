@@ -2,7 +2,7 @@
 // checked before the work, messages say only what is accepted, printed figures are exact.
 #include <gtest/gtest.h>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

@@ -2,7 +2,7 @@
 // work: one error line, a non-zero exit, nothing written.
 #include <gtest/gtest.h>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

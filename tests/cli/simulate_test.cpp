@@ -3,7 +3,7 @@
 // an -o file in a missing directory) are one error line before anything is simulated.
 #include <gtest/gtest.h>
 
-#include "tests/cli/cli_run.hpp"
+#include "testing/cli_run.hpp"
 
 namespace {
 

@@ -66,10 +66,10 @@ TEST(Blindtest, ATinyRunScoresItsTrials) {
 TEST(Blindtest, InvalidOptionsNameTheField) {
   BlindtestOptions o;
   o.trials = 0;
-  EXPECT_NE(o.validate().find("trials"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("trials"), std::string::npos);
   o = {};
   o.effects = {"gremlins"};
-  EXPECT_NE(o.validate().find("gremlins"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
 }
 
 }  // namespace

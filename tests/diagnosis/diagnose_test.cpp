@@ -144,14 +144,14 @@ TEST(Diagnose, MismatchedRecordingsAreNamedWithTheReason) {
 TEST(Diagnose, InvalidOptionsNameTheField) {
   DiagnoseOptions o;
   o.fit_fraction = 1.5;
-  EXPECT_NE(o.validate().find("fit_fraction"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("fit_fraction"), std::string::npos);
   o = {};
   o.candidates = {"gremlins"};
-  EXPECT_NE(o.validate().find("gremlins"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
   o = {};
   o.primary = "q_lps";
   o.channels = {"y_dwe_mm"};
-  EXPECT_NE(o.validate().find("channels"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("channels"), std::string::npos);
 }
 
 }  // namespace

@@ -82,7 +82,7 @@ TEST(Locate, InconsistentLengthsAreRejected) {
   EXPECT_THROW(locate({r}), std::invalid_argument);
   LocateOptions o;
   o.fir_order = 1;
-  EXPECT_NE(o.validate().find("fir_order"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("fir_order"), std::string::npos);
 }
 
 }  // namespace

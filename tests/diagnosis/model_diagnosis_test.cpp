@@ -9,15 +9,15 @@
 #include <cmath>
 #include <numbers>
 
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
 
 using reduced::Model;
 using reduced::ModelKind;
-using reduced::testing::SyntheticSpec;
-using reduced::testing::synthetic_recording;
+using testing::SyntheticSpec;
+using testing::synthetic_recording;
 
 Model liom(double K, double T, double L) {
   Model m{ModelKind::liom, {}, {}};

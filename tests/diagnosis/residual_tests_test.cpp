@@ -90,7 +90,7 @@ TEST(ResidualTests, EffectiveSamplesOfAr1FollowTheBartlettFactor) {
 TEST(ResidualTests, InvalidOptionsAreNamed) {
   ResidualTestOptions o;
   o.max_lag = 0;
-  EXPECT_NE(o.validate().find("max_lag"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("max_lag"), std::string::npos);
   EXPECT_THROW(residual_tests({1.0, 2.0}, {}, o), std::invalid_argument);
   EXPECT_THROW(residual_tests({1.0, 2.0}, {1.0}), std::invalid_argument);
 }

@@ -8,7 +8,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
 namespace {
@@ -180,7 +180,7 @@ TEST(GammaSweep, PicksTheGammaWithTheBestNrmseNearTheTrueExponent) {
   FitOptions o;
   o.head_ref_mm = 60.0;
   std::vector<std::string> progress;
-  o.progress = [&](const std::string& line) { progress.push_back(line); };
+  o.progress = [&](const ProgressReport& report) { progress.push_back(report.message); };
   const auto sweep = gamma_sweep(ModelKind::nliom_f, data, o, GammaGrid{1.0, 5.0, 0.5});
   ASSERT_EQ(sweep.gamma.size(), 9u);
   EXPECT_DOUBLE_EQ(sweep.gamma[sweep.best], 3.0);

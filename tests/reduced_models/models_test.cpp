@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
 namespace {

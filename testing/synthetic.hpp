@@ -12,7 +12,10 @@
 #include "reduced_models/data.hpp"
 #include "reduced_models/models.hpp"
 
-namespace canalsim::reduced::testing {
+namespace canalsim::testing {
+
+using reduced::ExperimentData;
+using reduced::Model;
 
 // Maximal-length 9-stage LFSR (x^9 + x^5 + 1): period 511. `rest` samples at u0 first.
 inline std::vector<double> prbs(std::size_t n, std::size_t rest, std::size_t clock_samples,
@@ -62,10 +65,10 @@ inline Recording synthetic_recording(const Model& truth, const SyntheticSpec& s)
   d.y0_mm = s.y0;
   Model m = truth;
   m.actuation.quantum_mm = 0.0;
-  auto y = simulate(m, d, {}).y_dwe_mm;
+  auto y = reduced::simulate(m, d, {}).y_dwe_mm;
   std::mt19937 rng(s.seed);
   std::normal_distribution<double> noise(0.0, s.noise);
-  for (double& v : y) v = quantise(v + (s.noise > 0 ? noise(rng) : 0.0), s.quantum);
+  for (double& v : y) v = reduced::quantise(v + (s.noise > 0 ? noise(rng) : 0.0), s.quantum);
   Recording rec;
   rec.source = "synthetic.csv";
   rec.set_column("t_s", d.t_s);
@@ -75,4 +78,4 @@ inline Recording synthetic_recording(const Model& truth, const SyntheticSpec& s)
   return rec;
 }
 
-}  // namespace canalsim::reduced::testing
+}  // namespace canalsim::testing

@@ -19,55 +19,32 @@
 // our numbers, saying whether the conclusion holds on these recordings. No verdict is written by
 // hand; each one is computed.
 //
-// This module needs only recordings (DESIGN.md: reduced_models depends on the recording type);
-// the CLI (cli/reproduce.cpp) simulates the laboratory canal and passes the recordings in.
+// The study needs only recordings and the reduced models (docs/architecture.md); the CLI
+// (cli/reproduce.cpp) simulates the laboratory canal and passes the recordings in. Its parts:
+// study/paper.hpp (the published tables), study/claims.hpp (the conclusions, computed),
+// study/render.hpp (tables.json, tables.md, report.html).
 #pragma once
 
-#include <functional>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
+#include "core/recording.hpp"
+#include "core/status.hpp"
 #include "reduced_models/identification.hpp"
+#include "study/claims.hpp"
 
-namespace canalsim::reduced::study {
+namespace canalsim::study {
 
-// ---------------------------------------------------------------------------------------------
-// The paper's tables (reduced_models/data/paper_tables.json, embedded at configure time).
-
-const nlohmann::json& paper_tables();
-// The number at a JSON pointer, e.g. "/table1_LIOM/fits/op1/K"; throws std::out_of_range naming
-// the pointer when it is absent or not a number.
-double paper_value(const std::string& pointer);
-
-// ---------------------------------------------------------------------------------------------
-// Generated conclusions.
-
-struct Claim {
-  std::string table;  // "table4"
-  std::string text;   // the whole sentence, ending with its verdict
-  bool holds = false;
-};
-
-// "SUBJECT at op1 and op2: paper +3.13 and +5.91 UNIT, here +2.10 and −0.40 UNIT — holds." The
-// claim is that every difference is positive; it holds when every `here` difference is positive
-// at the printed precision (≥ 0.005; the verdict names the places where it fails). Sizes of `where`, `paper` and `here` must match.
-Claim difference_claim(const std::string& table, const std::string& subject,
-                       const std::vector<std::string>& where, const std::vector<double>& paper,
-                       const std::vector<double>& here, const std::string& unit = "points");
-
-// "SUBJECT (RANGE_TEXT) at op3 and op4: paper 6.15 and 6.85, here 1.2 and 0.8 — does not hold
-// (op3, op4)." Holds when every `here` value lies in [lower, upper].
-Claim range_claim(const std::string& table, const std::string& subject, const std::string& range_text,
-                  const std::vector<std::string>& where, const std::vector<double>& paper,
-                  const std::vector<double>& here, double lower, double upper);
-
-// "SUBJECT: paper BEST_PAPER, here BEST_HERE — holds." for "which model is best" claims; holds
-// when the names are equal.
-Claim same_claim(const std::string& table, const std::string& subject, const std::string& paper,
-                 const std::string& here);
+using reduced::ExperimentData;
+using reduced::FitResult;
+using reduced::GammaGrid;
+using reduced::GammaSweep;
+using reduced::Model;
+using reduced::ModelKind;
+using reduced::Validation;
 
 // ---------------------------------------------------------------------------------------------
 // Options and results.
@@ -75,15 +52,15 @@ Claim same_claim(const std::string& table, const std::string& subject, const std
 struct StudyOptions {
   GammaGrid gamma{0.0, 10.0, 0.05};  // the paper's search range [0, 10]
   unsigned threads = 2;              // FitOptions.threads for every fit and sweep
-  // Called with one-line progress messages (may be empty).
-  std::function<void(const std::string&)> progress;
+  // Progress of the fits and sweeps (may be empty).
+  ProgressCallback progress;
   // PRBS design of the experiments (for the spectrum of Figure 4): clock period Tc and stages n.
   double prbs_clock_s = 0.5;
   int prbs_stages = 9;
   // Samples kept per plotted series in report.html (every k-th sample); 0 = all.
   std::size_t plot_points = 1200;
 
-  std::string validate() const;  // empty when valid, else one line naming the field
+  Status validate() const;  // ok, or one line naming the field
 };
 
 // Experiments the study needs and what they stand for in the paper.
@@ -170,11 +147,4 @@ StudyResult run_study(const std::map<std::string, Recording>& recordings,
 // The claims about one model table or the validation tables (used by run_study; exposed for tests).
 std::vector<Claim> conclusions(const StudyResult& result);
 
-// Outputs: tables.json, tables.md and a self-contained report.html (data and plotting code
-// inline; no network).
-nlohmann::json to_json(const StudyResult& result);
-std::string to_markdown(const StudyResult& result);
-std::string to_html(const StudyResult& result, const std::map<std::string, Recording>& recordings,
-                    const StudyOptions& options = {});
-
-}  // namespace canalsim::reduced::study
+}  // namespace canalsim::study

@@ -1,14 +1,15 @@
 // Tests of reduced_models/study.*: the embedded paper tables, the generated conclusions, and the
 // table builder on synthetic recordings of a known model.
-#include "reduced_models/study.hpp"
+#include "study/paper.hpp"
+#include "study/study.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "tests/reduced_models/synthetic.hpp"
+#include "testing/synthetic.hpp"
 
-namespace canalsim::reduced::study {
+namespace canalsim::study {
 namespace {
 
 TEST(PaperTables, ReturnThePublishedNumbers) {
@@ -121,4 +122,4 @@ TEST(ModelTable, RecoversTheParametersOfAKnownLfom) {
 }
 
 }  // namespace
-}  // namespace canalsim::reduced::study
+}  // namespace canalsim::study

@@ -1,0 +1,272 @@
+#include "calibration/replay.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "scenarios/simulate.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+using scenarios::Scenario;
+
+std::string format(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+// The opening the experiment started from: the operating_opening_mm metadata when it is a valid
+// opening of the controlled gate, else the first command.
+double operating_point(const Recording& rec, const Scenario& scenario) {
+  double op = rec.column(columns::gate_command).front();
+  const std::string meta = rec.meta("operating_opening_mm");
+  char* end = nullptr;
+  const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
+  const scenarios::GateSpec* gate = controlled_gate(scenario);
+  if (!meta.empty() && end && *end == '\0' && parsed >= 0.0 && gate && parsed <= gate->max_opening_m * 1e3) op = parsed;
+  return op;
+}
+
+// The whole recording as a drive: time from 0, the command switched `command_lead_samples` early,
+// and one extra row holding the operating point before the first sample so that the replay
+// settles there.
+Recording sampled_drive(const Recording& rec, double op, double lead_s, double period) {
+  const double shift = rec.column(columns::time).front() + lead_s;
+  Recording drive;
+  drive.source = rec.source;
+  drive.metadata = rec.metadata;
+  for (std::size_t c = 0; c < rec.names.size(); ++c) {
+    std::vector<double> v = rec.columns[c];
+    const std::string& name = rec.names[c];
+    if (name == columns::time) {
+      for (auto& x : v) x -= shift;
+      v.insert(v.begin(), v.front() - 1e-3 * period);
+    } else {
+      v.insert(v.begin(), name == columns::gate_command ? op : v.front());
+    }
+    drive.names.push_back(name);
+    drive.columns.push_back(std::move(v));
+  }
+  return drive;
+}
+
+// A drive of the command alone: the operating point before t = 0, u[0] from t = 0, then each
+// change at its reconstructed clock instant.
+Recording clocked_drive(const Recording& rec, double op, const std::vector<double>& switches, double period) {
+  const std::vector<double>& t = rec.column(columns::time);
+  const std::vector<double>& u = rec.column(columns::gate_command);
+  std::vector<double> dt{-1e-3 * period, 0.0}, du{op, u.front()};
+  std::size_t j = 0;
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    if (u[k] == u[k - 1]) continue;
+    const double at = switches[j++] - t.front();
+    if (at <= dt.back()) continue;
+    dt.push_back(at);
+    du.push_back(u[k]);
+  }
+  Recording drive;
+  drive.source = rec.source;
+  drive.metadata = rec.metadata;
+  drive.set_meta("operating_opening_mm", format(op));
+  drive.names = {columns::time, columns::gate_command};
+  drive.columns = {dt, du};
+  return drive;
+}
+
+}  // namespace
+
+const scenarios::GateSpec* controlled_gate(const Scenario& s) {
+  if (s.head_gate && s.head_gate->controlled) return &*s.head_gate;
+  for (const auto& g : s.gates) {
+    if (g.controlled) return &g;
+  }
+  return nullptr;
+}
+
+Replay prepare_replay(const Recording& rec, const Scenario& scenario, const ReplayOptions& o) {
+  Replay p;
+  p.period_s = scenario.sensors.period_s;
+  const double period = p.period_s;
+  p.name = rec.source.empty() ? rec.meta("experiment", "recording") : rec.source;
+  const std::vector<double>& t = rec.column(columns::time);
+  const std::vector<double>& u = rec.column(columns::gate_command);
+  const std::size_t total = t.size();
+  p.skip = std::min(total / 3, static_cast<std::size_t>(std::ceil(o.warmup_s / period - 1e-9)));
+  auto tail = [&](const std::vector<double>& v) {
+    return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(p.skip), v.end());
+  };
+  p.t = tail(t);
+  for (auto& x : p.t) x -= t.front();
+  p.u = tail(u);
+  p.n = p.t.size();
+  p.n_fit = static_cast<std::size_t>(std::round(o.fit_fraction * static_cast<double>(p.n)));
+  if (rec.has(columns::regime)) p.regime = tail(rec.column(columns::regime));
+  for (const auto& c : o.channels) {
+    if (rec.has(c)) p.data[c] = tail(rec.column(c));
+  }
+  p.operating_point_mm = operating_point(rec, scenario);
+  p.drive = sampled_drive(rec, p.operating_point_mm, o.command_lead_samples * period, period);
+  const bool upstream_replayed = o.use_recorded_upstream && rec.has(columns::upstream_level);
+  if (o.reconstruct_clock && !upstream_replayed) {
+    const std::vector<double> switches = command_switch_times(t, u);
+    if (!switches.empty()) {
+      p.drive = clocked_drive(rec, p.operating_point_mm, switches, period);
+      p.clocked = true;
+    }
+  }
+  return p;
+}
+
+Channels replay_true(const Scenario& s, const Replay& p, const ReplayOptions& o) {
+  scenarios::ExperimentSpec e;
+  e.name = p.name;
+  e.operating_opening_mm = p.operating_point_mm;
+  e.duration_s = (static_cast<double>(p.n + p.skip) - 0.5) * p.period_s;
+  e.input.kind = scenarios::InputKind::constant;
+  scenarios::SensorSpec ideal = s.sensors;
+  ideal.resolution_mm = 0.0;
+  ideal.noise_std_mm = 0.0;
+  ideal.delay_s = 0.0;
+  ideal.offset_mm = 0.0;
+  e.sensors = ideal;
+  scenarios::SimulateOptions so;
+  so.drive.recording = &p.drive;
+  so.drive.use_recorded_upstream = o.use_recorded_upstream && p.drive.has(columns::upstream_level);
+  so.settle_time = o.settle_time_s;
+  const Recording r = scenarios::simulate(s, e, so);
+  Channels out;
+  for (const auto& [c, y] : p.data) {
+    if (!r.has(c)) continue;
+    const std::vector<double>& all = r.column(c);
+    std::vector<double> v(all.begin() + static_cast<std::ptrdiff_t>(std::min(p.skip, all.size())), all.end());
+    v.resize(p.n, v.empty() ? 0.0 : v.back());
+    out[c] = std::move(v);
+  }
+  return out;
+}
+
+ChannelWeights channel_weights(const std::vector<Replay>& replays, const std::vector<std::string>& channels) {
+  ChannelWeights w;
+  for (const auto& c : channels) {
+    double sum = 0.0;
+    int count = 0;
+    for (const auto& p : replays) {
+      const auto it = p.data.find(c);
+      if (it == p.data.end()) continue;
+      const auto& y = it->second;
+      const double m = std::accumulate(y.begin(), y.end(), 0.0) / static_cast<double>(y.size());
+      double v = 0.0;
+      for (double x : y) v += (x - m) * (x - m);
+      sum += std::sqrt(v / static_cast<double>(y.size()));
+      ++count;
+    }
+    if (count == 0) continue;
+    const double floor = c == columns::discharge ? 0.05 : 0.5;
+    w.scale[c] = std::max(sum / count, floor);
+    w.weight[c] = 1.0 / (w.scale[c] * w.scale[c]);
+  }
+  return w;
+}
+
+std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
+  std::vector<std::size_t> changes;
+  for (std::size_t k = 1; k < u.size(); ++k) {
+    if (u[k] != u[k - 1]) changes.push_back(k);
+  }
+  if (changes.size() < 8 || t.size() < 2) return {};
+  const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  double d_min = 1e300;
+  for (std::size_t j = 1; j < changes.size(); ++j) d_min = std::min(d_min, t[changes[j]] - t[changes[j - 1]]);
+  // Every grid point must fall in its change interval (t[k-1], t[k]], widened by a small
+  // tolerance: a switch exactly at a sample instant (0.5 s clock, 0.13 s samples: every 6.5 s)
+  // may show at that sample or the next, depending on rounding in the recorder.
+  const double tol = 0.03 * h;
+  auto feasible = [&](double period, double phase) {
+    for (std::size_t k : changes) {
+      const double m = std::ceil((t[k - 1] - tol - phase) / period);
+      const double s = phase + m * period;
+      if (!(s >= t[k - 1] - tol && s <= t[k] + tol)) return false;
+    }
+    return true;
+  };
+  const std::size_t first = changes.front();
+  std::vector<std::pair<double, double>> found;  // feasible (period, phase)
+  // A period error δ moves the m-th grid point by m δ, so the step must be below the tolerance
+  // divided by the number of periods the changes span (~500 for a 255 s PRBS at 0.5 s).
+  const double span = t[changes.back()] - t[changes.front() - 1];
+  const double period_step = std::max(1e-7, 0.5 * tol * std::max(d_min - h, 0.5 * h) / std::max(span, h));
+  for (double period = std::max(0.5 * h, d_min - h); period <= d_min + h; period += period_step) {
+    for (int i = 0; i <= 80; ++i) {
+      const double phase = t[first - 1] - tol + (h + 2.0 * tol) * i / 80.0;
+      if (feasible(period, phase)) found.emplace_back(period, phase);
+    }
+  }
+  if (found.empty()) return {};
+  // A finer grid can also fit (a few periods shorter than the clock pass by chance); the
+  // longest consistent period is the clock. Its feasible patch is convex: take its centre.
+  const double longest = found.back().first;
+  double sum_period = 0.0, sum_phase = 0.0;
+  int count = 0;
+  for (const auto& [period, phase] : found) {
+    if (longest - period > 1e-3 * longest) continue;
+    sum_period += period;
+    sum_phase += phase;
+    ++count;
+  }
+  const double period = sum_period / count, phase = sum_phase / count;
+  if (!feasible(period, phase)) return {};
+  std::vector<double> out;
+  for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
+  return out;
+}
+
+std::vector<std::string> check_recordings(const Scenario& s, const std::vector<Recording>& recordings) {
+  std::vector<std::string> problems;
+  const scenarios::GateSpec* gate = controlled_gate(s);
+  const double max_mm = gate ? gate->max_opening_m * 1e3 : std::numeric_limits<double>::infinity();
+  const double h = s.sensors.period_s;
+  if (recordings.empty()) problems.push_back("no recordings given");
+  for (const Recording& rec : recordings) {
+    const std::string name = rec.source.empty() ? "recording" : rec.source;
+    std::vector<std::string> missing;
+    for (const char* c : {columns::time, columns::gate_command, columns::level_downstream_end}) {
+      if (!rec.has(c)) missing.push_back(c);
+    }
+    if (!missing.empty()) {
+      std::string list;
+      for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+      problems.push_back(name + ": missing channel(s) " + list);
+      continue;
+    }
+    if (rec.size() < 50) {
+      problems.push_back(name + ": " + std::to_string(rec.size()) + " samples, expected at least 50");
+      continue;
+    }
+    const double hr = rec.sample_period();
+    if (std::abs(hr - h) > 0.01 * h) {
+      problems.push_back(name + ": sampled every " + format(hr) + " s, but the scenario's sensors sample every " +
+                         format(h) + " s (sensors.period_s)");
+    }
+    for (const char* c : {columns::gate_command, columns::gate_position}) {
+      if (!rec.has(c)) continue;
+      const auto& v = rec.column(c);
+      const auto& t = rec.column(columns::time);
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (v[k] < -1e-9 || v[k] > max_mm + 1e-9) {
+          problems.push_back(name + ": " + c + " = " + format(v[k]) + " mm at t = " + format(t[k]) +
+                             " s is outside the controlled gate's range 0.." + format(max_mm) + " mm");
+          break;
+        }
+      }
+    }
+  }
+  if (!gate) problems.push_back(s.source + ": the scenario has no gate with controlled = true to replay the command on");
+  return problems;
+}
+
+}  // namespace canalsim::calibration

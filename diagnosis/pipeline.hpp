@@ -1,0 +1,125 @@
+// One diagnosis pipeline for every kind of model (docs/diagnosis.md), written once:
+//
+//   1. nominal residuals → locate the mismatch (locate.hpp) and test it (residual_tests.hpp);
+//      the noise figures of the recordings;
+//   2. explain: every candidate effect fitted and judged on held-out data (by the Explainer);
+//   3. rank: significant first, then effects that could be evaluated, then by score;
+//   4. verdict: the best significant effect, else `none` (within the noise) or `unexplained`;
+//   5. the corrected prediction of the verdict → locate and test again.
+//
+// An Explainer is the model-specific part: the scenario engine (diagnose.hpp, re-simulating the
+// canal) and the reduced-model engine (model_diagnosis.hpp, refitting a reduced model) implement
+// it. The significance rule and the BIC are written here once and used by both.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/progress.hpp"
+#include "diagnosis/locate.hpp"
+#include "diagnosis/residual_tests.hpp"
+
+namespace canalsim::diagnosis {
+
+struct ParameterEstimate {
+  std::string name;
+  std::string unit;
+  double value = 0.0;
+  double std = 0.0;   // one standard deviation; 0 when the cost was flat or at a bound
+};
+
+struct EffectResult {
+  std::string name;
+  double score = 0.0;            // relative held-out cost reduction (1 = perfect, < 0 = worse)
+  bool significant = false;
+  bool material = false;
+  ParameterEstimate parameter;
+  double nrmse_before = 0.0, nrmse_after = 0.0;                  // primary, fitted part, mean over recordings
+  double heldout_nrmse_before = 0.0, heldout_nrmse_after = 0.0;  // primary, held-out part
+  double cost_before = 0.0, cost_after = 0.0;                    // channel-balanced, fitted part
+  double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
+  double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
+  int simulations = 0;           // re-simulations spent on the fit
+  std::string note;              // why it was skipped, if it was
+};
+
+// Per-recording series for plots (primary channel, mm).
+struct RecordingSeries {
+  std::string name;
+  std::vector<double> t, u, recorded, nominal, corrected;
+  std::size_t fit_samples = 0;
+};
+
+struct Diagnosis {
+  bool ok = true;
+  std::string message;           // numerical failure (a simulation that did not run), when !ok
+  std::string verdict;           // none | unexplained | an effect name
+  std::string reason;            // one sentence on how the verdict was reached
+  std::vector<EffectResult> effects;   // ranked, best first
+  Mismatch mismatch;             // of the nominal model
+  Mismatch mismatch_after;       // with the winner (equals mismatch when there is none)
+  std::vector<ResidualTests> tests_before, tests_after;  // per recording, primary channel
+  double noise = 0.0;            // estimated measurement noise of the primary channel [mm]
+  double noise_limit_nrmse = 0.0;  // Nrmse a perfect model would reach given that noise
+  double nominal_rms = 0.0;      // primary residual RMS of the nominal model [mm]
+  std::vector<RecordingSeries> series;
+  std::map<std::string, double> channel_scale;  // s_c of the cost weights
+  double seconds = 0.0;
+};
+
+// The model-specific half of a diagnosis.
+class Explainer {
+ public:
+  virtual ~Explainer() = default;
+  // Runs the nominal model (simulation or fit) and returns its residuals, one set per recording.
+  virtual std::vector<RecordingResiduals> nominal_residuals() = 0;
+  // Resolution of the level sensors in the nominal model [mm] (floor of the noise estimate).
+  virtual double sensor_resolution() const = 0;
+  // Fits one candidate effect and judges it (score, BIC, significance).
+  virtual EffectResult explain(const std::string& candidate) = 0;
+  // Residuals and plotted series with an explained effect's corrected prediction ("" = nominal).
+  virtual std::vector<RecordingResiduals> residuals_with(const std::string& effect) const = 0;
+  virtual std::vector<RecordingSeries> series_with(const std::string& effect) const = 0;
+  // Extra figures of the result (the scenario engine's channel scales).
+  virtual void describe(Diagnosis&) const {}
+};
+
+struct PipelineSettings {
+  double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise
+  ResidualTestOptions tests;
+  LocateOptions locate;
+  ProgressCallback progress;       // share of the candidates explained, and the candidate
+};
+
+// Runs the pipeline over `candidates` (names the explainer knows). An InputError propagates; any
+// other failure (a simulation that did not run) is returned as ok = false with its message.
+Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& candidates,
+                       const PipelineSettings& settings);
+
+// BIC(after) − BIC(before) of an effect on the fitted part: n_eff log(cost_after / cost_before)
+// + k log n_eff, with n_eff the number of samples corrected for residual correlation and k the
+// parameters the effect adds (Schwarz 1978).
+double bic_change(double n_eff, double cost_before, double cost_after, int extra_parameters = 1);
+
+// The significance rule of every engine: a material parameter, a held-out cost reduction of at
+// least min_score and a BIC gain of at least min_bic_gain; optionally the held-out Nrmse must
+// rise too ("show the fit improve": a pooled cost can fall through one recording while the others
+// get worse).
+struct SignificanceRule {
+  double min_score = 0.15;
+  double min_bic_gain = 10.0;
+  bool heldout_nrmse_must_rise = false;
+};
+bool is_significant(const EffectResult& effect, const SignificanceRule& rule);
+
+// Noise of the primary channel estimated from the recordings themselves, the nominal residual RMS
+// and the Nrmse a perfect model would reach given that noise (fields of `d`).
+void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d);
+
+// Verdict and reason from the ranked effects and the nominal residual tests: the first effect
+// when it is significant (returns true); else `none` when the nominal residual is within
+// none_noise_factor × the noise or passes the residual tests; else `unexplained`.
+bool set_verdict(Diagnosis& d, double none_noise_factor);
+
+}  // namespace canalsim::diagnosis

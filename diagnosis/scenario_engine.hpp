@@ -1,0 +1,102 @@
+// The scenario engine of the diagnosis (internal to diagnosis/): the Explainer (pipeline.hpp)
+// that replays the recordings through a scenario, fits each catalog effect by re-simulating (or,
+// for sensor effects, by re-observing the nominal simulation) and judges it on the held-out part
+// of every recording. diagnose.cpp holds the engine's core and its judgement; scenario_fits.cpp
+// the fit of each effect.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "calibration/observe.hpp"
+#include "calibration/replay.hpp"
+#include "diagnosis/catalog.hpp"
+#include "diagnosis/diagnose.hpp"
+#include "diagnosis/pipeline.hpp"
+
+namespace canalsim::diagnosis::scenario_engine {
+
+using scenarios::Scenario;
+using calibration::Channels;
+using Prepared = calibration::Replay;
+
+// Evaluated hypothesis: its parameter, predictions and weighted fitted-part residual vector.
+struct Point {
+  double theta = 0.0;
+  std::vector<Channels> prediction;
+  std::vector<double> r;   // sqrt(w_c) (data - model) over the fitted parts, all channels
+  double cost = 0.0;       // r·r / fitted samples
+};
+
+struct Costs {
+  double fit = 0.0, heldout = 0.0;
+  double nrmse_fit = 0.0, nrmse_heldout = 0.0;
+  // Per-channel mean squared residual (raw units²) on the fitted and held-out parts.
+  std::map<std::string, double> mse_fit, mse_heldout;
+};
+
+// The scenario half of the pipeline (pipeline.hpp): replays the recordings through the scenario,
+// fits each catalog effect by re-simulating (or, for sensor effects, by re-observing the nominal
+// simulation) and judges it on the held-out part of every recording.
+class Engine final : public Explainer {
+ public:
+  Engine(const Scenario& base, const std::vector<Recording>& recordings, const DiagnoseOptions& options)
+      : base_(base), recordings_(recordings), o_(options) {}
+
+  // Explainer:
+  std::vector<RecordingResiduals> nominal_residuals() override;
+  double sensor_resolution() const override { return sensors_.resolution_mm; }
+  EffectResult explain(const std::string& candidate) override;
+  std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override;
+  std::vector<RecordingSeries> series_with(const std::string& effect) const override;
+  void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
+
+ private:
+  void prepare();
+  void simulate_nominal();
+  const std::vector<Channels>& prediction_with(const std::string& effect) const;
+  Costs costs(const std::vector<Channels>& prediction) const;
+  // Channel-balanced cost: the mean over channels of MSE_c / MSE_c(nominal), each nominal MSE
+  // floored at a sensor-noise level, so an effect that explains one channel's residual counts
+  // however small that channel's share of the weighted cost (a 0.1 mm lattice error in the
+  // levels next to gate-position glitches).
+  double balanced(const Costs& c, bool heldout) const;
+  Channels simulate_true(const Scenario& s, const Prepared& p);
+  std::vector<Channels> predict(Effect effect, double theta);
+  Point evaluate(Effect effect, double theta);
+  std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
+
+  // The fit of each catalog effect (the effect's parameter θ at its best point).
+  Point fit_sensor_offset();
+  Point fit_sensor_delay();
+  Point fit_sensor_quantization();
+  Point fit_gate_rate_limit(int& sims);
+  Point fit_by_secant(Effect effect, const Point& start, int& sims);
+  Point rate_limit_from_position(int& sims);
+  EffectResult unchanged(Effect effect) const;
+  EffectResult judge(Effect effect, Point best, int sims);
+  double parameter_std(Effect effect, const Point& best) const;
+  double lattice_resolution() const;
+  double reading_spread(double resolution) const;
+  double heldout_coherence(double r) const;
+
+  const Scenario& base_;
+  const std::vector<Recording>& recordings_;
+  const DiagnoseOptions& o_;
+  std::vector<Prepared> recs_;
+  SensorModel sensors_;
+  double period_ = 0.13;
+  std::map<std::string, double> scale_, weight_;
+  std::vector<Channels> truth_;      // nominal, ideal sensors
+  std::vector<Channels> nominal_;    // nominal, scenario sensors
+  std::vector<double> inflow_m3s_;
+  Point nominal_point_;
+  Costs nominal_costs_;
+  double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
+  std::size_t fit_samples_ = 0;
+  std::map<std::string, Point> best_;
+};
+
+
+}  // namespace canalsim::diagnosis::scenario_engine

@@ -1,0 +1,242 @@
+// The fit of each catalog effect in the scenario engine (scenario_engine.hpp).
+#include "diagnosis/scenario_engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <numbers>
+
+#include "core/laws.hpp"
+
+namespace canalsim::diagnosis::scenario_engine {
+namespace {
+
+using calibration::is_level;
+
+// Gate position under a constant-speed actuator (paper eq. 16) driven by the replayed command
+// (the drive's t_s/u_mm step function, exactly as the simulation replays it), at `samples`.
+std::vector<double> rate_limited_position(const Recording& drive, const std::vector<double>& samples, double speed_mm_s) {
+  const auto& ct = drive.column(columns::time);
+  const auto& cu = drive.column(columns::gate_command);
+  // An infinite speed (or inf * 0) is the ideal actuator: at the command (laws::rate_limited_move).
+  const auto move = laws::rate_limited_move;
+  std::vector<double> x;
+  x.reserve(samples.size());
+  double pos = cu.front(), now = ct.front();
+  std::size_t j = 0;
+  for (double s : samples) {
+    while (j + 1 < ct.size() && ct[j + 1] <= s) {
+      pos = move(pos, cu[j], speed_mm_s * (ct[j + 1] - now));
+      now = ct[j + 1];
+      ++j;
+    }
+    pos = move(pos, cu[j], speed_mm_s * (s - now));
+    now = s;
+    x.push_back(pos);
+  }
+  return x;
+}
+
+
+// Least-squares lattice step: with k_i = nint(y_i / r), r = Σ y_i k_i / Σ k_i². Levels of tens of
+// millimetres sit ~100 steps from zero, so the scan's 0.005 mm grid is refined to ~1e-5 mm; a
+// step off by 1% would put the model's lattice a whole step away from the recorded one.
+double refine_lattice(const std::vector<const std::vector<double>*>& series, double r) {
+  for (int it = 0; it < 4; ++it) {
+    double yk = 0.0, kk = 0.0;
+    for (const auto* y : series) {
+      for (double v : *y) {
+        const double k = std::round(v / r);
+        yk += v * k;
+        kk += k * k;
+      }
+    }
+    if (!(kk > 0.0)) break;
+    r = yk / kk;
+  }
+  return r;
+}
+
+}  // namespace
+
+// Gauss–Newton with a secant Jacobian on the weighted residual vector: each step solves the
+// one-parameter linearisation r(θ) ≈ r_best + J (θ − θ_best) between the best point and its
+// nearest neighbour, within the catalog range.
+Point Engine::fit_by_secant(Effect effect, const Point& start, int& sims) {
+  const EffectInfo& e = info(effect);
+  std::vector<Point> pts;
+  pts.push_back(start);
+  pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
+  ++sims;
+  const double tol = 2e-3 * (e.theta_high - e.theta_low);
+  while (sims < o_.max_evaluations) {
+    const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
+    const Point* near = nullptr;
+    for (const auto& q : pts) {
+      if (&q == &*best) continue;
+      if (!near || std::abs(q.theta - best->theta) < std::abs(near->theta - best->theta)) near = &q;
+    }
+    const double dtheta = best->theta - near->theta;
+    if (dtheta == 0.0) break;
+    double jj = 0.0, jr = 0.0;
+    for (std::size_t k = 0; k < best->r.size(); ++k) {
+      const double j = (best->r[k] - near->r[k]) / dtheta;
+      jj += j * j;
+      jr += j * best->r[k];
+    }
+    if (!(jj > 0.0)) break;
+    // r = data - model, so the model's sensitivity is -J; the step minimises |r_best + J δ|².
+    double step = -jr / jj;
+    const double span = std::max(4.0 * std::abs(dtheta), 0.1 * (e.theta_high - e.theta_low));
+    step = std::clamp(step, -span, span);
+    const double next = std::clamp(best->theta + step, e.theta_low, e.theta_high);
+    bool seen = false;
+    for (const auto& q : pts) seen = seen || std::abs(q.theta - next) < tol;
+    if (seen) break;
+    pts.push_back(evaluate(effect, next));
+    ++sims;
+  }
+  const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
+  return *best;
+}
+
+// The rate limit shows directly in the recorded gate position: fit the actuator speed to x_up
+// against the command (golden section on θ = 1/v), then simulate once at the estimate.
+Point Engine::rate_limit_from_position(int& sims) {
+  std::vector<std::vector<double>> instants;
+  for (const auto& p : recs_) {
+    std::vector<double> at(p.n);
+    for (std::size_t k = 0; k < p.n; ++k) at[k] = static_cast<double>(p.skip + k) * period_;
+    instants.push_back(std::move(at));
+  }
+  auto cost = [&](double theta) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < recs_.size(); ++i) {
+      const Prepared& p = recs_[i];
+      const auto& x = p.data.at(columns::gate_position);
+      const std::vector<double> m =
+          rate_limited_position(p.drive, instants[i], theta <= 0.0 ? std::numeric_limits<double>::infinity() : 1.0 / theta);
+      for (std::size_t k = 0; k < p.n_fit; ++k) s += (x[k] - m[k]) * (x[k] - m[k]);
+    }
+    return s;
+  };
+  const EffectInfo& e = info(Effect::gate_rate_limit);
+  // Coarse logarithmic scan in speed first: the cost has a plateau at high speed.
+  double best_theta = 0.0, best_cost = cost(0.0);
+  for (double v = 0.5; v <= 400.0; v *= 1.1) {
+    const double c = cost(1.0 / v);
+    if (c < best_cost) { best_cost = c; best_theta = 1.0 / v; }
+  }
+  if (best_theta > 0.0) {
+    double a = best_theta / 1.1, b = std::min(best_theta * 1.1, e.theta_high);
+    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
+    for (int it = 0; it < 40; ++it) {
+      const double c = b - g * (b - a), d = a + g * (b - a);
+      if (cost(c) < cost(d)) {
+        b = d;
+      } else {
+        a = c;
+      }
+    }
+    best_theta = 0.5 * (a + b);
+  }
+  if (best_theta <= 0.0) return nominal_point_;
+  ++sims;
+  return evaluate(Effect::gate_rate_limit, best_theta);
+}
+
+// The largest resolution r whose lattice r·k holds the recorded levels: |mean exp(2πi y/r)| near 1
+// over a channel that spans at least six lattice steps. The scenario's resolution when none does.
+double Engine::lattice_resolution() const {
+  // Differences from each series' first sample: on the lattice when the samples are, and only
+  // tens of steps from zero, so a coarse scan already finds the right multiples.
+  std::vector<std::vector<double>> diffs;
+  for (const auto& p : recs_) {
+    for (const auto& [c, y] : p.data) {
+      if (!is_level(c) || y.empty()) continue;
+      std::vector<double> d(y.size());
+      for (std::size_t k = 0; k < y.size(); ++k) d[k] = y[k] - y.front();
+      diffs.push_back(std::move(d));
+    }
+  }
+  std::vector<const std::vector<double>*> series;
+  for (const auto& d : diffs) series.push_back(&d);
+  for (double r = info(Effect::sensor_quantization).theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
+    double coherent = 0.0, total = 0.0;
+    for (const auto* y : series) {
+      const auto [lo, hi] = std::minmax_element(y->begin(), y->end());
+      if (*hi - *lo < 6.0 * r) continue;
+      std::complex<double> s = 0.0;
+      for (double v : *y) s += std::polar(1.0, 2.0 * std::numbers::pi * v / r);
+      coherent += std::abs(s);
+      total += static_cast<double>(y->size());
+    }
+    if (total > 0.0 && coherent / total > 0.9) return refine_lattice(series, r);
+  }
+  return sensors_.resolution_mm;
+}
+
+// Lattice coherence |mean exp(2πi (y - y_first)/r)| of the held-out recorded levels.
+double Engine::heldout_coherence(double r) const {
+  std::complex<double> sum = 0.0;
+  double count = 0.0;
+  for (const auto& p : recs_) {
+    for (const auto& [c, y] : p.data) {
+      if (!is_level(c) || p.n_fit >= y.size()) continue;
+      for (std::size_t k = p.n_fit; k < y.size(); ++k) sum += std::polar(1.0, 2.0 * std::numbers::pi * (y[k] - y[p.n_fit]) / r);
+      count += static_cast<double>(y.size() - p.n_fit);
+    }
+  }
+  return count > 0.0 ? std::abs(sum) / count : 0.0;
+}
+
+// Median of the level residuals on the fitted parts: the offset that explains them best in the
+// least-absolute sense (robust to the transients a pure offset does not explain).
+Point Engine::fit_sensor_offset() {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    for (const auto& [c, y] : recs_[i].data) {
+      if (!is_level(c)) continue;
+      for (std::size_t k = 0; k < recs_[i].n_fit; ++k) d.push_back(y[k] - nominal_[i].at(c)[k]);
+    }
+  }
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return evaluate(Effect::sensor_offset, d.empty() ? 0.0 : d[d.size() / 2]);
+}
+
+// A delay re-observes the nominal simulation (no re-simulation): a 0.02 s grid, then the vertex
+// of the parabola through the best grid point and its neighbours.
+Point Engine::fit_sensor_delay() {
+  const EffectInfo& e = info(Effect::sensor_delay);
+  Point best = nominal_point_;
+  best.theta = 0.0;
+  for (double th = 0.02; th <= e.theta_high + 1e-9; th += 0.02) {
+    Point p = evaluate(Effect::sensor_delay, th);
+    if (p.cost < best.cost) best = std::move(p);
+  }
+  if (best.theta > 0.0 && best.theta < e.theta_high) {
+    const double a = evaluate(Effect::sensor_delay, best.theta - 0.02).cost;
+    const double c = evaluate(Effect::sensor_delay, best.theta + 0.02).cost;
+    const double den = a - 2.0 * best.cost + c;
+    if (den > 0.0) {
+      Point p = evaluate(Effect::sensor_delay, best.theta + 0.01 * (a - c) / den);
+      if (p.cost < best.cost) best = std::move(p);
+    }
+  }
+  return best;
+}
+
+Point Engine::fit_sensor_quantization() { return evaluate(Effect::sensor_quantization, lattice_resolution()); }
+
+// From the recorded gate position when every recording has it, else by re-simulation.
+Point Engine::fit_gate_rate_limit(int& sims) {
+  bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
+  for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
+  Point best = have_position ? rate_limit_from_position(sims)
+                             : fit_by_secant(Effect::gate_rate_limit, Point{0.0, nominal_, nominal_point_.r, nominal_point_.cost}, sims);
+  if (std::isnan(best.theta)) best.theta = 0.0;
+  return best;
+}
+
+}  // namespace canalsim::diagnosis::scenario_engine
