@@ -77,6 +77,7 @@ void add_all_commands(CLI::App& app) {
   add_simulate_command(app);
   add_diagnose_command(app);
   add_blindtest_command(app);
+  add_linearize_command(app);
 }
 
 int run_command_line(CLI::App& app, int argc, char** argv) {

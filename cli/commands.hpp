@@ -1,5 +1,5 @@
 // Subcommands of the canalsim program: one file per subcommand, each registering itself on the
-// application. The CLI only parses arguments and calls the libraries (DESIGN.md).
+// application. The CLI only parses arguments and calls the libraries (docs/architecture.md).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -15,5 +15,6 @@ void add_simulate_command(CLI::App& app);
 void add_diagnose_command(CLI::App& app);
 void add_blindtest_command(CLI::App& app);
 void add_reproduce_command(CLI::App& app);
+void add_linearize_command(CLI::App& app);
 
 }  // namespace canalsim::cli

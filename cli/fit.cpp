@@ -19,6 +19,8 @@
 #include "cli/checks.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
+#include "cli/freq_check.hpp"
+#include "scenarios/builtin.hpp"
 #include "reduced_models/identification.hpp"
 #include "core/progress.hpp"
 #include "core/recording.hpp"
@@ -40,6 +42,7 @@ struct FitArguments {
   std::string memory = "short";
   std::size_t memory_terms = 500;
   unsigned threads = 2;
+  std::string freq_check;  // scenario the recordings were simulated from
 };
 
 std::string fixed(double v, int digits) {
@@ -133,6 +136,13 @@ void run_fit(const FitArguments& args) {
   if (args.memory != "short" && args.memory != "full") {
     throw InputError("--memory " + args.memory + ": expected short or full");
   }
+  // --freq-check: the scenario and each recording's experiment, before any fit.
+  std::optional<scenarios::Scenario> check_scenario;
+  std::vector<const scenarios::ExperimentSpec*> check_experiments;
+  if (!args.freq_check.empty()) {
+    check_scenario = scenarios::load_scenario_or_builtin(args.freq_check);
+    check_experiments = freq_check_experiments(*check_scenario, args.recordings);
+  }
   DataOptions data_options;
   data_options.upstream_level_mm = args.upstream_level_mm;
   std::vector<ExperimentData> data;
@@ -219,8 +229,12 @@ void run_fit(const FitArguments& args) {
     std::cout << "\n";
   }
 
+  nlohmann::json freq_check;
+  if (check_scenario) freq_check = print_freq_check(*check_scenario, check_experiments, fits, data);
+
   if (args.json.empty()) return;
   nlohmann::json out;
+  if (check_scenario) out["freq_check"] = freq_check;
   out["model"] = model_name(kind);
   out["options"] = {{"quantum_mm", args.quantum_mm},
                     {"gate_speed_mm_s", args.gate_speed_mm_s},
@@ -281,6 +295,9 @@ void add_fit_command(CLI::App& app) {
       ->capture_default_str()
       ->check(integer_in(1, 100000000, "a number of terms"));
   cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str()->check(thread_count());
+  cmd->add_option("--freq-check", args->freq_check,
+                  "Scenario the recordings were simulated from: compare each fitted model's frequency response "
+                  "with the linearised pool's over the PRBS band (docs/linearization.md)");
   cmd->callback([args] { run_fit(*args); });
 }
 

@@ -25,6 +25,7 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "study/bode.hpp"
 #include "study/render.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/prbs.hpp"
@@ -117,6 +118,11 @@ void run_reproduce(const ReproduceArguments& args) {
   const std::string json = study::to_json(result).dump(1) + "\n";
   const std::string md = study::to_markdown(result);
   const std::string html = study::to_html(result, recordings, options);
+  // The Bode section (docs/linearization.md §6): files of their own, the tables stay as they were.
+  const auto bode = study::bode_sections(scenarios::builtin_scenario("lab"), result);
+  const std::string bode_json = study::bode_json(bode).dump(1) + "\n";
+  const std::string bode_md = study::bode_markdown(bode);
+  const std::string bode_html = study::bode_html(bode);
   progress.finish();
 
   // Write: all or nothing. A file that cannot be replaced restores the others' previous contents
@@ -127,7 +133,8 @@ void run_reproduce(const ReproduceArguments& args) {
     throw InputError(dir.string() + ": cannot create --out directory: " + ec.message());
   }
   const std::vector<FileContents> files = {
-      {dir / "tables.json", json}, {dir / "tables.md", md}, {dir / "report.html", html}};
+      {dir / "tables.json", json}, {dir / "tables.md", md}, {dir / "report.html", html},
+      {dir / "bode.json", bode_json}, {dir / "bode.md", bode_md}, {dir / "bode.html", bode_html}};
   try {
     write_files_atomically(files);
   } catch (...) {

@@ -1,5 +1,6 @@
 #include "core/format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -16,6 +17,12 @@ std::string format_fixed(double value, int decimals) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
   return buffer;
+}
+
+std::string format_estimate(double value, double std) {
+  if (!(std > 0.0) || !std::isfinite(std)) return format_g(value, 4) + " (± n/a)";
+  const int decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(std))), 0, 12);
+  return format_fixed(value, decimals) + " ± " + format_fixed(std, decimals);
 }
 
 std::string format_excerpt(const std::string& text) {

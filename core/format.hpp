@@ -12,6 +12,11 @@ std::string format_g(double value, int significant = 6);
 // Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or nan.
 std::string format_fixed(double value, int decimals);
 
+// An estimate with its standard deviation, "0.0123 ± 0.0041": the deviation to two significant
+// digits and the value to the same decimal place (so a small deviation never prints as ± 0.000).
+// A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)".
+std::string format_estimate(double value, double std);
+
 // A value echoed in a message: at most the first 60 characters (whole UTF-8 characters) and
 // then "... (N characters)", so that a 1 MB field does not make a 1 MB error line.
 std::string format_excerpt(const std::string& text);

@@ -163,7 +163,7 @@ std::string text_summary(const Diagnosis& d) {
   int width = 22;
   for (const auto& e : d.effects) width = std::max(width, static_cast<int>(e.name.size()));
   char line[320];
-  std::snprintf(line, sizeof line, "%-*s %7s %4s %22s %9s %9s %9s %9s %8s\n", width, "effect", "score", "sig",
+  std::snprintf(line, sizeof line, "%-*s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, "effect", "score", "sig",
                 "parameter", "Nrmse fit", "after", "held-out", "after", "dBIC");
   s << line;
   for (const auto& e : d.effects) {
@@ -172,8 +172,8 @@ std::string text_summary(const Diagnosis& d) {
       s << line << e.note << '\n';
       continue;
     }
-    const std::string p = fixed(e.parameter.value, 3) + " +- " + fixed(e.parameter.std, 3) + " " + e.parameter.unit;
-    std::snprintf(line, sizeof line, "%-*s %7.3f %4s %22s %9.2f %9.2f %9.2f %9.2f %8.0f\n", width, e.name.c_str(),
+    const std::string p = format_estimate(e.parameter.value, e.parameter.std) + " " + e.parameter.unit;
+    std::snprintf(line, sizeof line, "%-*s %7.3f %4s %26s %9.2f %9.2f %9.2f %9.2f %8.0f\n", width, e.name.c_str(),
                   e.score, e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after,
                   e.heldout_nrmse_before, e.heldout_nrmse_after, e.delta_bic);
     s << line;
@@ -220,8 +220,8 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
        "<th>after</th><th>Nrmse held-out</th><th>after</th><th>&#916;BIC</th></tr>";
   for (const auto& e : d.effects) {
     s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << html::escape(e.name) << "</td><td>" << fixed(e.score)
-      << "</td><td>" << html::escape(e.parameter.name) << " = " << fixed(e.parameter.value) << " &#177; "
-      << fixed(e.parameter.std) << ' ' << html::escape(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
+      << "</td><td>" << html::escape(e.parameter.name) << " = " << html::escape(format_estimate(e.parameter.value, e.parameter.std))
+      << ' ' << html::escape(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
       << "</td><td>" << fixed(e.nrmse_after, 2) << "</td><td>" << fixed(e.heldout_nrmse_before, 2) << "</td><td>"
       << fixed(e.heldout_nrmse_after, 2) << "</td><td>" << fixed(e.delta_bic, 0) << "</td></tr>";
   }

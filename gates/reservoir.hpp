@@ -73,6 +73,9 @@ class Reservoir {
   // returns the new level [m].
   double advance(double dt, double outflow);
 
+  // Places the stored volume [m³] without touching the controller or the cumulative totals
+  // (the linearisation perturbs the level; volume_balance_error() then counts the change).
+  void set_volume(double volume) { volume_ = volume; }
   double level() const { return volume_ / options_.plan_area; }
   double volume() const { return volume_; }
   double initial_volume() const { return initial_volume_; }

@@ -41,6 +41,8 @@ class GateOperation {
   double command(double t) const;     // [m], clamped
   void on_step_accepted(double t, double dt);
   void reset(double t, double opening);  // places the gate (e.g. at the operating point)
+  // Replaces the command signal (the linearisation drives the gate with a value it perturbs).
+  void set_command(TimeSignal command) { command_ = std::move(command); }
 
  private:
   TimeSignal command_;

@@ -90,11 +90,11 @@ void Canal::restore_start_state() {
   }
 }
 
-double Canal::compute_fluxes(double t) {
+double Canal::compute_fluxes(double t, bool centred_kinks) {
   const double g = options_.gravity;
   const StageSettings settings{options_.order == SpatialOrder::second,
                                options_.limiter == Limiter::van_leer, options_.limiter_theta,
-                               options_.dry_depth};
+                               options_.dry_depth, centred_kinks};
   double limit = std::numeric_limits<double>::infinity();
   // Interior faces of every reach first: the end faces need the primitives of neighbours.
   for (Reach& r : reaches_) {
@@ -268,58 +268,13 @@ Status Canal::advance_to(double t_end) {
     return Status::error(text.str());
   }
   if (auto st = check_ready(); !st) return st;
-  sample_due_probes();
   while (time_ < t_end) {
-    double stop = t_end;
-    for (const Probe& p : probes_) {
-      const double next = p.next_time();
-      if (next > time_) stop = std::min(stop, next);
-    }
-    const double max_dt = stop - time_;
+    const double max_dt = t_end - time_;
     if (auto st = step(max_dt); !st) return st;
-    // A step clipped to `stop` lands on it exactly (no accumulated round-off in sample times).
-    if (stats_.last_dt == max_dt || time_ > stop) time_ = stop;
-    sample_due_probes();
+    // A step clipped to t_end lands on it exactly (no accumulated round-off).
+    if (stats_.last_dt == max_dt || time_ > t_end) time_ = t_end;
   }
   return Status::ok();
-}
-
-Status Canal::validate_probe(const ProbeSpec& p) const {
-  if (p.reach < 0 || p.reach >= reach_count())
-    return Status::error("ProbeSpec::reach = " + std::to_string(p.reach) + " is outside the allowed range [0, " + std::to_string(reach_count() - 1) + "]");
-  const double len = reach(p.reach).length();
-  std::ostringstream text;
-  if (!(p.x >= 0.0 && p.x <= len)) {
-    text << "ProbeSpec::x = " << p.x << " m is outside the allowed range [0, " << len << "] m";
-    return Status::error(text.str());
-  }
-  if (!(p.period > 0.0 && std::isfinite(p.period))) {
-    text << "ProbeSpec::period = " << p.period << " s is outside the allowed range (0, inf) s";
-    return Status::error(text.str());
-  }
-  if (std::isinf(p.start)) return Status::error("ProbeSpec::start must be finite or NaN (NaN: now)");
-  return Status::ok();
-}
-
-int Canal::add_probe(const ProbeSpec& spec) {
-  if (!validate_probe(spec)) return -1;
-  Probe p;
-  p.spec = spec;
-  if (std::isnan(p.spec.start)) p.spec.start = time_;
-  // Samples before the current time are skipped.
-  while (p.next_time() < time_) ++p.next_index;
-  probes_.push_back(p);
-  return static_cast<int>(probes_.size()) - 1;
-}
-
-void Canal::sample_due_probes() {
-  for (Probe& p : probes_) {
-    while (p.next_time() <= time_) {
-      p.samples.time.push_back(p.next_time());
-      p.samples.value.push_back(sample(p.spec.reach, p.spec.x, p.spec.quantity));
-      ++p.next_index;
-    }
-  }
 }
 
 double Canal::sample(int ri, double x, Quantity quantity) const {
@@ -381,8 +336,8 @@ int Canal::total_cells() const {
   return n;
 }
 
-void Canal::evaluate_rates(double t, std::vector<double>& rates) {
-  compute_fluxes(t);  // primitives, limited slopes, interior and end-face fluxes of every reach
+void Canal::evaluate_rates(double t, std::vector<double>& rates, LimiterKinks kinks) {
+  compute_fluxes(t, kinks == LimiterKinks::centred);  // primitives, limited slopes, interior and end-face fluxes of every reach
   const double g = options_.gravity;
   rates.assign(2 * static_cast<std::size_t>(total_cells()), 0.0);
   std::size_t c = 0;
@@ -410,6 +365,11 @@ void Canal::evaluate_rates(double t, std::vector<double>& rates) {
       rates[2 * c + 1] = dq;
     }
   }
+}
+
+double Canal::end_face_discharge(int ri, End end) const {
+  const Reach& r = reach(ri);
+  return r.face_mass_[end == End::upstream ? 0 : static_cast<std::size_t>(r.cells_)];
 }
 
 bool Canal::boundary_flux(int ri, End end, const InteriorState& cell, double t, Flux* out) const {

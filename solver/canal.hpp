@@ -6,14 +6,13 @@
 //   if (auto st = canal.add_reach(spec); !st) ...  // st.message() names the bad field
 //   canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.002));
 //   canal.set_boundary(0, End::downstream, std::make_shared<CriticalDepthBoundary>());
-//   int p = canal.add_probe({0, 4.9, Quantity::depth, 0.1});
 //   if (auto st = canal.advance_to(60.0); !st) ...  // non-finite state: time, reach and cell
-//   canal.probe_samples(p); canal.total_balance().error();
+//   canal.sample(0, 4.9, Quantity::depth); canal.total_balance().error();
 //
 // Scheme per step (Audusse et al. 2004 hydrostatic reconstruction, HLL flux, MUSCL on η, h, u,
 // Heun's SSP-RK2, semi-implicit Manning friction); dt = cfl · min dx / max |wave speed| over the
-// faces of the first stage, clipped to the next probe time or end time. Step clipping, not time
-// interpolation, is how probes sample at exact times.
+// faces of the first stage, clipped to the end time. Recordings sample the state between steps
+// (scenarios/simulate.cpp interpolates in time), so no step is cut short to hit a sample time.
 #pragma once
 
 #include <limits>
@@ -49,18 +48,10 @@ struct VolumeBalance {
 
 enum class Quantity { depth, level, area, discharge, velocity, froude };
 
-struct ProbeSpec {
-  int reach = 0;
-  double x = 0.0;       // [m] from the reach's upstream end; linear between cell centres
-  Quantity quantity = Quantity::depth;
-  double period = 1.0;  // [s], > 0
-  // First sample time [s]; NaN means the canal's time when the probe is added.
-  double start = std::numeric_limits<double>::quiet_NaN();
-};
-
-struct ProbeSamples {
-  std::vector<double> time;
-  std::vector<double> value;
+// How Canal::evaluate_rates treats the slope limiter where it is not differentiable.
+enum class LimiterKinks {
+  as_scheme,  // the scheme's own limiter (what a time step uses)
+  centred,    // the centred slope at kinks (solver/rates_jacobian.hpp, docs/linearization.md)
 };
 
 struct StepStatistics {
@@ -95,12 +86,9 @@ class Canal {
 
   // One time step of at most max_dt. On failure the state is left at the start of the step.
   Status step(double max_dt = std::numeric_limits<double>::infinity());
-  // Steps until time() == t_end exactly, sampling the probes on the way.
+  // Steps until time() == t_end exactly (the last step is clipped to land on it).
   Status advance_to(double t_end);
 
-  int add_probe(const ProbeSpec& probe);  // returns the probe index; -1 if invalid (see probe_status)
-  Status validate_probe(const ProbeSpec& probe) const;
-  const ProbeSamples& probe_samples(int p) const { return probes_.at(static_cast<std::size_t>(p)).samples; }
   // The value of a quantity at x in a reach now (linear interpolation between cell centres,
   // constant beyond the first and last centres).
   double sample(int reach, double x, Quantity quantity) const;
@@ -117,7 +105,13 @@ class Canal {
   // every step, whatever dt). Layout: cells of all reaches in order, rates[2c] = dA/dt,
   // rates[2c + 1] = dQ/dt. Takes no step and advances no boundary state (used by the steady-state
   // solver, solver/steady_state.hpp).
-  void evaluate_rates(double t, std::vector<double>& rates);
+  // With LimiterKinks::centred the slope limiter takes the centred slope where it is not
+  // differentiable (StageSettings::centred_kinks): for the linearisation's Jacobian only.
+  void evaluate_rates(double t, std::vector<double>& rates, LimiterKinks kinks = LimiterKinks::as_scheme);
+  // The mass flux through an end face of a reach at the last flux evaluation (a step's stage or
+  // evaluate_rates) [m³/s], positive downstream; at a downstream end it includes an end-face
+  // withdrawal (Reach::fixed_end_withdrawal).
+  double end_face_discharge(int reach, End end) const;
   int total_cells() const;
   // The flux the boundary at `end` of `reach` returns at time t for an adjacent face state `cell`
   // (the steady-state solver's first guess asks it). False, and *out untouched, when that end is
@@ -130,22 +124,15 @@ class Canal {
     std::shared_ptr<Link> link;
     int other_reach = -1;
   };
-  struct Probe {
-    ProbeSpec spec;
-    long next_index = 0;
-    ProbeSamples samples;
-    double next_time() const { return spec.start + static_cast<double>(next_index) * spec.period; }
-  };
   struct Accumulators {  // per reach
     double initial_storage = 0, inflow = 0, outflow = 0, lateral = 0, correction = 0;
     double stage_inflow = 0, stage_outflow = 0, stage_lateral = 0;  // weighted over a step
   };
 
-  double compute_fluxes(double t);  // all reaches, returns min over reaches of dx / max speed
+  double compute_fluxes(double t, bool centred_kinks = false);  // all reaches, returns min over reaches of dx / max speed
   Status apply_update(double dt, double alpha, double weight, bool final_stage, bool* reject);
   void save_start_state();
   void restore_start_state();
-  void sample_due_probes();
   Status find_non_finite(double t) const;
 
   SolverOptions options_;
@@ -153,7 +140,6 @@ class Canal {
   std::vector<Reach> reaches_;
   std::vector<EndConnection> upstream_ends_, downstream_ends_;
   std::vector<Accumulators> acc_;
-  std::vector<Probe> probes_;
   double time_ = 0.0;
   StepStatistics stats_;
 };

@@ -35,7 +35,17 @@ struct ReachKernels {
     primitives_loop(n, a, q, z, h, u, eta, inv_a, ops, dry);
     if (s.second_order) {
       const double th = s.theta;
-      if (s.van_leer) {
+      if (s.centred_kinks) {
+        // Linearisation (not a time step's path): tolerances relative to the reach's flow.
+        double deepest = 0.0;
+        for (int i = 0; i < n; ++i) deepest = std::max(deepest, h[i]);
+        const double depth_tolerance = 1e-5 * deepest, velocity_tolerance = 1e-5 * ops.celerity(deepest);
+        for (int i = 1; i < n - 1; ++i) {
+          dh[i] = slope_centred_at_kinks(h[i - 1], h[i], h[i + 1], depth_tolerance, s.van_leer, th);
+          deta[i] = slope_centred_at_kinks(eta[i - 1], eta[i], eta[i + 1], depth_tolerance, s.van_leer, th);
+          du[i] = slope_centred_at_kinks(u[i - 1], u[i], u[i + 1], velocity_tolerance, s.van_leer, th);
+        }
+      } else if (s.van_leer) {
 #pragma omp simd
         for (int i = 1; i < n - 1; ++i) {
           dh[i] = van_leer_slope(h[i - 1], h[i], h[i + 1]);

@@ -51,6 +51,13 @@ struct StageSettings {
   bool van_leer = true;    // van Leer's harmonic limiter; false: generalised minmod with theta
   double theta = 1.0;      // generalised minmod parameter
   double dry_depth = 1e-10;
+  // Linearisation only (Canal::evaluate_rates with LimiterKinks::centred, docs/linearization.md):
+  // where the one-sided differences d₋, d₊ of a cell are not both clearly of one sign
+  // (d₋ d₊ <= (1e-5 · scale)², scale = the reach's largest depth, or its celerity for u), the
+  // limiter's slope is replaced by the centred difference (d₋ + d₊)/2 — the limit of van Leer's
+  // derivative on smooth monotone data — so that the finite-difference Jacobian is the same on
+  // either side of the limiter's kink (flat stretches, extrema).
+  bool centred_kinks = false;
 };
 
 struct UpdateSettings {
@@ -96,6 +103,20 @@ inline double van_leer_slope(double am, double a0, double ap) {
   const double product = d1 * d2;
   const double sum = product > 0.0 ? d1 + d2 : 1.0;  // divide unconditionally, select after
   return product > 0.0 ? 2.0 * product / sum : 0.0;
+}
+
+// The slope of the linearisation at a limiter's kink (StageSettings::centred_kinks): the limited
+// slope where it is clearly differentiable, the centred one elsewhere. van Leer's limiter has its
+// kink where d₋d₊ <= 0; the generalised minmod also where its two smallest candidates θd₋, θd₊,
+// (d₋ + d₊)/2 meet (e.g. d₋ = d₊ on a linear profile, where it switches between them).
+inline double slope_centred_at_kinks(double am, double a0, double ap, double tolerance, bool van_leer,
+                                     double theta) {
+  const double d1 = a0 - am, d2 = ap - a0, centred = 0.5 * (ap - am);
+  if (!(d1 * d2 > tolerance * tolerance)) return centred;
+  if (van_leer) return van_leer_slope(am, a0, ap);
+  double c[3] = {std::abs(theta * d1), std::abs(theta * d2), std::abs(centred)};
+  std::sort(c, c + 3);
+  return c[1] - c[0] > tolerance ? limited_slope(am, a0, ap, theta) : centred;
 }
 
 inline void end_slopes(const double* h, const double* eta, const double* u, double* dh, double* deta,

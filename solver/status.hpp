@@ -1,5 +1,5 @@
 // Status: the result of an operation that can fail for numerical or input reasons. Failure is a
-// returned value with a one-line message, never an abort (DESIGN.md). A failed step also names
+// returned value with a one-line message, never an abort (docs/architecture.md). A failed step also names
 // where it happened (time, reach, cell) so that callers can report it.
 #pragma once
 

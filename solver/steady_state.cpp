@@ -1,62 +1,29 @@
 #include "solver/steady_state.hpp"
 
+#include "solver/rates_jacobian.hpp"
 #include "solver/scheme.hpp"
+#include "solver/sundials_handles.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <sstream>
 #include <vector>
 
-#include <kinsol/kinsol.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 namespace canalsim::solver {
 namespace {
 
-// Cell c's rates depend on its two faces, and a face on the reconstructions (limited slopes) of
-// its two cells: cells c-2..c+2. (A margin buys nothing: a missed dependence would show as a
-// Newton that converges linearly, which tests/solver/steady_state_test would catch.)
-constexpr int kStencil = 2;                    // half-width of the dependence, in cells
-constexpr int kColours = 2 * kStencil + 1;     // cells this far apart share a colour
-
 // Everything KINSOL's callbacks need.
 struct Problem {
   Canal* canal;
   double time;
-  int cells;
+  RatesPattern pattern;
   std::vector<double> rates;
   std::vector<double> unknown_scale;  // typical |A| and |Q| per unknown
   int evaluations = 0;
 };
-
-// Writes the unknowns (A, Q interleaved per cell) into the reaches. False if an area is negative.
-bool load_state(Canal& canal, const double* u) {
-  std::size_t c = 0;
-  for (int r = 0; r < canal.reach_count(); ++r) {
-    Reach& reach = canal.reach(r);
-    for (int i = 0; i < reach.cells(); ++i, ++c) {
-      if (!(u[2 * c] >= 0.0) || !std::isfinite(u[2 * c + 1])) return false;
-      reach.area()[static_cast<std::size_t>(i)] = u[2 * c];
-      reach.discharge()[static_cast<std::size_t>(i)] = u[2 * c + 1];
-    }
-  }
-  return true;
-}
-
-void store_state(const Canal& canal, double* u) {
-  std::size_t c = 0;
-  for (int r = 0; r < canal.reach_count(); ++r) {
-    const Reach& reach = canal.reach(r);
-    for (int i = 0; i < reach.cells(); ++i, ++c) {
-      u[2 * c] = reach.area()[static_cast<std::size_t>(i)];
-      u[2 * c + 1] = reach.discharge()[static_cast<std::size_t>(i)];
-    }
-  }
-}
 
 // KINSOL residual: F(u) = L(u). A negative area is a recoverable failure (KINSOL backtracks).
 int residual(N_Vector u, N_Vector f, void* data) {
@@ -72,49 +39,14 @@ int residual(N_Vector u, N_Vector f, void* data) {
   return 0;
 }
 
-// Coloured finite-difference Jacobian in CSC form: column j = 2c + m holds rows of cells
-// c - kStencil .. c + kStencil.
-int jacobian(N_Vector u, N_Vector f, SUNMatrix J, void* data, N_Vector work1, N_Vector) {
+// The coloured finite-difference Jacobian (solver/rates_jacobian.hpp) in KINSOL's CSC matrix.
+int jacobian(N_Vector u, N_Vector f, SUNMatrix J, void* data, N_Vector, N_Vector) {
   auto* p = static_cast<Problem*>(data);
-  const int n = p->cells;
-  double* x = N_VGetArrayPointer(u);
-  const double* f0 = N_VGetArrayPointer(f);
-  double* fp = N_VGetArrayPointer(work1);
-  sunindextype* colptr = SUNSparseMatrix_IndexPointers(J);
-  sunindextype* rowidx = SUNSparseMatrix_IndexValues(J);
-  double* values = SUNSparseMatrix_Data(J);
-  // Pattern (fixed): the band of each column.
-  sunindextype nz = 0;
-  for (int c = 0; c < n; ++c) {
-    for (int m = 0; m < 2; ++m) {
-      colptr[2 * c + m] = nz;
-      for (int r = std::max(0, c - kStencil); r <= std::min(n - 1, c + kStencil); ++r) {
-        rowidx[nz++] = 2 * r;
-        rowidx[nz++] = 2 * r + 1;
-      }
-    }
-  }
-  colptr[2 * n] = nz;
-  std::vector<double> step(2 * static_cast<std::size_t>(n));
-  for (int colour = 0; colour < kColours; ++colour) {
-    for (int m = 0; m < 2; ++m) {
-      for (int c = colour; c < n; c += kColours) {
-        const std::size_t j = 2 * static_cast<std::size_t>(c) + m;
-        step[j] = 1e-7 * std::max(std::abs(x[j]), p->unknown_scale[j]);
-        x[j] += step[j];
-      }
-      const int failed = residual(u, work1, data);
-      for (int c = colour; c < n; c += kColours) {
-        const std::size_t j = 2 * static_cast<std::size_t>(c) + m;
-        x[j] -= step[j];
-        for (sunindextype k = colptr[j]; k < colptr[j + 1]; ++k) {
-          values[k] = failed ? 0.0 : (fp[rowidx[k]] - f0[rowidx[k]]) / step[j];
-        }
-      }
-      if (failed) return 1;
-    }
-  }
-  return load_state(*p->canal, x) ? 0 : 1;
+  std::copy(p->pattern.column_start.begin(), p->pattern.column_start.end(), SUNSparseMatrix_IndexPointers(J));
+  std::copy(p->pattern.row.begin(), p->pattern.row.end(), SUNSparseMatrix_IndexValues(J));
+  const bool ok = rates_jacobian(*p->canal, p->time, N_VGetArrayPointer(u), N_VGetArrayPointer(f), p->unknown_scale,
+                                 p->pattern, {}, SUNSparseMatrix_Data(J), &p->evaluations);
+  return ok ? 0 : 1;
 }
 
 // --- first guess by shooting -----------------------------------------------------------------
@@ -325,10 +257,6 @@ double residual_size(Canal& canal, double time, std::vector<double>& rates, doub
 
 void silent(int, const char*, const char*, char*, void*) {}
 
-struct KinsolDeleter {
-  void operator()(void* mem) const { KINFree(&mem); }
-};
-
 std::string kinsol_message(int flag) {
   switch (flag) {
     case KIN_LINESEARCH_NONCONV: return "the line search could not reduce the residual";
@@ -370,7 +298,8 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
   const int n = canal.total_cells();
   const sunindextype unknowns = 2 * static_cast<sunindextype>(n);
 
-  Problem problem{&canal, canal.time(), n, {}, std::vector<double>(static_cast<std::size_t>(unknowns)), 0};
+  Problem problem{&canal, canal.time(), rates_jacobian_pattern(n), {},
+                  std::vector<double>(static_cast<std::size_t>(unknowns)), 0};
   // Scales: a typical area and discharge per reach (1 mm of depth and 1% of the largest
   // discharge at least), so that tolerances and FD steps are relative to the flow.
   std::vector<double> initial(static_cast<std::size_t>(unknowns));
@@ -385,10 +314,11 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
     problem.unknown_scale[static_cast<std::size_t>(k + 1)] = std::max(q_scale, 1e-3 * a_scale);
   }
 
-  sundials::Context context;
-  N_Vector u = N_VNew_Serial(unknowns, context);
-  N_Vector u_scale = N_VNew_Serial(unknowns, context);
-  N_Vector f_scale = N_VNew_Serial(unknowns, context);
+  sundials::Context context;  // declared first: destroyed after every object made with it
+  const VectorHandle u_handle(N_VNew_Serial(unknowns, context));
+  const VectorHandle u_scale_handle(N_VNew_Serial(unknowns, context));
+  const VectorHandle f_scale_handle(N_VNew_Serial(unknowns, context));
+  N_Vector u = u_handle.get(), u_scale = u_scale_handle.get(), f_scale = f_scale_handle.get();
   std::copy(initial.begin(), initial.end(), N_VGetArrayPointer(u));
   // Unknowns scaled by their typical size; residuals by the rate that size changes at over one
   // cell-crossing time of a gravity wave, dx / sqrt(g h): both are then O(1) near the solution.
@@ -403,19 +333,22 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
     NV_Ith_S(u_scale, k) = 1.0 / scale;
     NV_Ith_S(f_scale, k) = crossing / scale;
   }
-  SUNMatrix J = SUNSparseMatrix(unknowns, unknowns, unknowns * 2 * kColours, CSC_MAT, context);
-  SUNLinearSolver ls = SUNLinSol_KLU(u, J, context);
+  const MatrixHandle J_handle(SUNSparseMatrix(unknowns, unknowns, static_cast<sunindextype>(problem.pattern.row.size()),
+                                              CSC_MAT, context));
+  SUNMatrix J = J_handle.get();
+  const LinearSolverHandle ls_handle(SUNLinSol_KLU(u, J, context));
+  SUNLinearSolver ls = ls_handle.get();
   // The Jacobian is a band (unknowns ordered along the canal, cell by cell): the natural ordering
   // keeps the factors inside it, and skips COLAMD's analysis (a third of the setup).
   SUNLinSol_KLUSetOrdering(ls, 2);
-  std::unique_ptr<void, KinsolDeleter> kin(KINCreate(context));
+  const KinsolHandle kin(KINCreate(context));
   int flag = KINInit(kin.get(), residual, u);
   if (flag == KIN_SUCCESS) flag = KINSetUserData(kin.get(), &problem);
   if (flag == KIN_SUCCESS) flag = KINSetErrHandlerFn(kin.get(), silent, nullptr);  // we report
   if (flag == KIN_SUCCESS) flag = KINSetLinearSolver(kin.get(), ls, J);
   if (flag == KIN_SUCCESS) flag = KINSetJacFn(kin.get(), jacobian);
   // Modified Newton from the shooting guess: one Jacobian serves up to 3 iterations (each
-  // then costs one residual instead of 2·kColours + 1; KINSOL re-evaluates it when the line search
+  // then costs one residual instead of 2·kRateColours + 1; KINSOL re-evaluates it when the line search
   // stalls). From any other start a fresh Jacobian every iteration: far from the solution a stale
   // one took 35 iterations where Newton takes 9.
   if (flag == KIN_SUCCESS) flag = KINSetMaxSetupCalls(kin.get(), iterations_per_jacobian);
@@ -444,12 +377,6 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
     }
   }
   summary.residual_evaluations = problem.evaluations;
-  kin.reset();
-  SUNLinSolFree(ls);
-  SUNMatDestroy(J);
-  N_VDestroy(f_scale);
-  N_VDestroy(u_scale);
-  N_VDestroy(u);
   return summary;
 }
 

@@ -117,6 +117,28 @@ nlohmann::json to_json(const StudyResult& r) {
   return out;
 }
 
+namespace {
+
+// A validation table (5 or 8) in Markdown: the paper's Nrmse / ours per experiment and model.
+void validation_rows(std::ostringstream& md, const ValidationTable& v) {
+  md << "| here (paper) |";
+  for (const auto& m : v.models) md << " " << m << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < v.models.size(); ++i) md << "---|";
+  md << "\n";
+  for (std::size_t row = 0; row < v.experiments.size(); ++row) {
+    md << "| " << v.experiments[row] << " (" << v.paper_experiments[row] << ") |";
+    for (std::size_t m = 0; m < v.models.size(); ++m) {
+      md << " " << cell(paper_opt("/" + v.paper_key + "/" + v.paper_experiments[row] + "/" + v.models[m]), 2)
+         << " / " << format_fixed(v.results[row][m].nrmse, 2) << " |";
+    }
+    md << "\n";
+  }
+  md << "\n";
+}
+
+}  // namespace
+
 std::string to_markdown(const StudyResult& r) {
   std::ostringstream md;
   std::size_t holds = 0;
@@ -172,40 +194,14 @@ std::string to_markdown(const StudyResult& r) {
     md << " |\n\n";
     if (t.spec.kind == ModelKind::nlfom_s) {
       // Table 5 follows Table 4.
-      const auto& v = r.table5;
-      md << "## Table 5 — " << v.title << "\n\n| here (paper) |";
-      for (const auto& m : v.models) md << " " << m << " |";
-      md << "\n|---|";
-      for (std::size_t i = 0; i < v.models.size(); ++i) md << "---|";
-      md << "\n";
-      for (std::size_t row = 0; row < v.experiments.size(); ++row) {
-        md << "| " << v.experiments[row] << " (" << v.paper_experiments[row] << ") |";
-        for (std::size_t m = 0; m < v.models.size(); ++m) {
-          md << " " << cell(paper_opt("/" + v.paper_key + "/" + v.paper_experiments[row] + "/" + v.models[m]), 2)
-             << " / " << format_fixed(v.results[row][m].nrmse, 2) << " |";
-        }
-        md << "\n";
-      }
-      md << "\n";
+      md << "## Table 5 — " << r.table5.title << "\n\n";
+      validation_rows(md, r.table5);
     }
   }
   {
-    const auto& v = r.table8;
-    md << "## Table 8 — " << v.title << "\n\nOur op3b/op4b repeat op3/op4 (43 and 45 mm) with another PRBS "
-          "seed and sensor noise, as the paper's op3*/op4* repeat them.\n\n| here (paper) |";
-    for (const auto& m : v.models) md << " " << m << " |";
-    md << "\n|---|";
-    for (std::size_t i = 0; i < v.models.size(); ++i) md << "---|";
-    md << "\n";
-    for (std::size_t row = 0; row < v.experiments.size(); ++row) {
-      md << "| " << v.experiments[row] << " (" << v.paper_experiments[row] << ") |";
-      for (std::size_t m = 0; m < v.models.size(); ++m) {
-        md << " " << cell(paper_opt("/" + v.paper_key + "/" + v.paper_experiments[row] + "/" + v.models[m]), 2)
-           << " / " << format_fixed(v.results[row][m].nrmse, 2) << " |";
-      }
-      md << "\n";
-    }
-    md << "\n";
+    md << "## Table 8 — " << r.table8.title << "\n\nOur op3b/op4b repeat op3/op4 (43 and 45 mm) with another PRBS "
+          "seed and sensor noise, as the paper's op3*/op4* repeat them.\n\n";
+    validation_rows(md, r.table8);
   }
   md << "## Conclusions\n\n";
   for (const std::string id : {"table1", "table2", "table3", "table4", "table5", "table6", "table7", "table8"}) {

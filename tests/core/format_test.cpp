@@ -29,5 +29,12 @@ TEST(FormatFixed, FixedDecimalsAndNamedNonFiniteValues) {
   EXPECT_EQ(format_fixed(std::nan(""), 2), "nan");
 }
 
+TEST(FormatEstimate, TwoSignificantDigitsOfTheDeviationNeverZero) {
+  EXPECT_EQ(format_estimate(0.01234, 0.00041), "0.01234 ± 0.00041");
+  EXPECT_EQ(format_estimate(12.345, 0.26), "12.35 ± 0.26");
+  EXPECT_EQ(format_estimate(1234.5, 37.0), "1234 ± 37");
+  EXPECT_EQ(format_estimate(0.5, 0.0), "0.5 (± n/a)");
+}
+
 }  // namespace
 }  // namespace canalsim

@@ -7,21 +7,17 @@
 #include <cmath>
 #include <random>
 
+#include "testing/signals.hpp"
+
 namespace canalsim::diagnosis {
 namespace {
 
-std::vector<double> white(std::size_t n, std::uint64_t seed, double sigma = 1.0) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  std::vector<double> x(n);
-  for (auto& v : x) v = g(rng);
-  return x;
-}
+using testing::white_noise;
 
 TEST(ModelErrorBand, LowPassLeakIsFoundAtLowFrequencies) {
   const double h = 0.13;
-  const auto u = white(4000, 1);
-  auto e = white(4000, 2, 0.1);
+  const auto u = white_noise(4000, 1);
+  auto e = white_noise(4000, 2, 0.1);
   // e += first-order low-pass of u (pole 0.95): gain falls with frequency.
   double state = 0.0;
   for (std::size_t t = 0; t < u.size(); ++t) {
@@ -36,7 +32,7 @@ TEST(ModelErrorBand, LowPassLeakIsFoundAtLowFrequencies) {
 }
 
 TEST(ModelErrorBand, IndependentResidualLeavesNoWideBand) {
-  const auto u = white(4000, 3), e = white(4000, 4);
+  const auto u = white_noise(4000, 3), e = white_noise(4000, 4);
   const FrequencyBand b = model_error_band({u}, {e}, 0.13);
   // At the 99% level a few isolated grid points may poke out; never a wide band.
   if (b.found) {
@@ -55,7 +51,7 @@ RecordingResiduals synthetic(std::size_t n) {
     r.level.push_back(40.0 + std::sin(0.02 * static_cast<double>(k)));
     r.regime.push_back(k < n / 2 ? 0.0 : 1.0);  // free, then submerged
   }
-  r.residuals["y_dwe_mm"] = white(n, 5, 0.05);
+  r.residuals["y_dwe_mm"] = white_noise(n, 5, 0.05);
   return r;
 }
 

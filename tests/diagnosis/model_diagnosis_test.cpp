@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "testing/realistic.hpp"
 #include "testing/synthetic.hpp"
 
 namespace canalsim::diagnosis {
@@ -68,6 +69,28 @@ TEST(ModelDiagnosis, CleanRecordingsOfTheModelItselfNameNoEffect) {
   const auto d = diagnose_model({rec}, options_for(ModelKind::liom, {"gate_rate_limit", "wave_resonance"}));
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "none") << d.reason;
+}
+
+// Real level sensors have offsets: a 0.3 mm lattice through 0.11 mm (not through zero) must be
+// found as well as one through zero, with its step (the old search divided the levels by the
+// step and so saw a lattice only through zero).
+TEST(ModelDiagnosis, ACoarseLatticeIsNamedWhateverItsOffset) {
+  for (double origin : {0.0, 0.11, -0.23}) {
+    SyntheticSpec spec = two_periods();
+    spec.quantum = 0.0;
+    testing::SensorRealism sensors;
+    sensors.quantum_mm = 0.3;
+    sensors.quantum_offset_mm = origin;
+    const auto rec = testing::realistic_levels(synthetic_recording(liom(0.68, 1.71, 4.9), spec), sensors);
+    const auto d = diagnose_model({rec}, options_for(ModelKind::liom, {"sensor_quantization", "gate_rate_limit"}));
+    ASSERT_TRUE(d.ok) << d.message;
+    EXPECT_EQ(d.verdict, "sensor_quantization") << "origin " << origin << ": " << d.reason;
+    const auto& e = effect(d, "sensor_quantization");
+    EXPECT_NEAR(e.parameter.value, 0.3, 0.003) << "origin " << origin;
+    // The expected reading on the found lattice does not make the held-out fit worse (measured:
+    // +2.5 points through zero, -0.12 and -0.002 points through 0.11 and -0.23 mm).
+    EXPECT_GE(e.heldout_nrmse_after, e.heldout_nrmse_before - 0.5) << "origin " << origin;
+  }
 }
 
 TEST(ModelDiagnosis, AConcealedGateRateLimitIsNamedAndItsSpeedRecoveredWithin25Percent) {

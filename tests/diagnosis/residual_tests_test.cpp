@@ -8,19 +8,15 @@
 #include <random>
 #include <stdexcept>
 
+#include "testing/signals.hpp"
+
 namespace canalsim::diagnosis {
 namespace {
 
-std::vector<double> white(std::size_t n, std::uint64_t seed, double sigma = 1.0) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  std::vector<double> x(n);
-  for (auto& v : x) v = g(rng);
-  return x;
-}
+using testing::white_noise;
 
 std::vector<double> ar1(std::size_t n, double a, std::uint64_t seed) {
-  std::vector<double> e = white(n, seed), x(n);
+  std::vector<double> e = white_noise(n, seed), x(n);
   x[0] = e[0];
   for (std::size_t t = 1; t < n; ++t) x[t] = a * x[t - 1] + e[t];
   return x;
@@ -29,7 +25,7 @@ std::vector<double> ar1(std::size_t n, double a, std::uint64_t seed) {
 TEST(ResidualTests, WhiteNoisePassesBothTestsInMostRealisations) {
   int passed = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const auto e = white(2000, seed), u = white(2000, seed + 1000);
+    const auto e = white_noise(2000, seed), u = white_noise(2000, seed + 1000);
     const ResidualTests t = residual_tests(e, u);
     passed += t.white() && t.uncorrelated();
   }
@@ -47,14 +43,14 @@ TEST(ResidualTests, AutocorrelationOfAr1IsAPowerOfItsCoefficient) {
 }
 
 TEST(ResidualTests, BoundIsZOverSqrtN) {
-  const ResidualTests t = residual_tests(white(2500, 4), {});
+  const ResidualTests t = residual_tests(white_noise(2500, 4), {});
   EXPECT_NEAR(t.autocorrelation.bound, 2.58 / 50.0, 1e-12);
   EXPECT_EQ(t.autocorrelation.lags.size(), 25u);
   EXPECT_TRUE(t.cross_correlation.values.empty());
 }
 
 TEST(ResidualTests, InputLeakingIntoTheResidualShowsAtItsLag) {
-  const auto u = white(5000, 5), v = white(5000, 6);
+  const auto u = white_noise(5000, 5), v = white_noise(5000, 6);
   std::vector<double> e(u.size());
   for (std::size_t t = 0; t < u.size(); ++t) e[t] = v[t] + (t >= 3 ? 0.5 * u[t - 3] : 0.0);
   const ResidualTests t = residual_tests(e, u);
@@ -72,7 +68,7 @@ TEST(ResidualTests, BinomialAllowanceMatchesHandComputedTails) {
 }
 
 TEST(ResidualTests, NoiseLevelOfASmoothSignalPlusWhiteNoiseIsTheNoise) {
-  const auto n = white(5000, 7, 0.2);
+  const auto n = white_noise(5000, 7, 0.2);
   std::vector<double> y(n.size());
   for (std::size_t k = 0; k < y.size(); ++k) y[k] = 5.0 * std::sin(0.01 * static_cast<double>(k)) + n[k];
   EXPECT_NEAR(noise_level(y, 0.0), 0.2, 0.02);

@@ -1,4 +1,4 @@
-// Canal (solver/canal.*): time stepping driver, multi-reach links, volume accounting, probes and
+// Canal (solver/canal.*): time stepping driver, multi-reach links, volume accounting, sampling and
 // failure reporting.
 #include <gtest/gtest.h>
 
@@ -71,10 +71,9 @@ TEST(VolumeBalance, InflowIntoADrySlopingTrapezoidalChannelWetsItAndBalanceClose
   ASSERT_TRUE(canal.add_reach(spec));
   canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.05));
   canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>());
-  const int front = canal.add_probe({0, 10.0, Quantity::depth, 1.0});
   ASSERT_TRUE(canal.advance_to(30.0));
   for (double a : canal.reach(0).area()) EXPECT_GE(a, 0.0);
-  EXPECT_GT(canal.probe_samples(front).value.back(), 0.0);  // the front passed mid-reach
+  EXPECT_GT(canal.sample(0, 10.0, Quantity::depth), 0.0);  // the front passed mid-reach
   const VolumeBalance b = canal.balance(0);
   EXPECT_NEAR(b.inflow, 0.05 * 30.0, 1e-12);
   EXPECT_LT(b.relative_error(), 1e-12) << b.error();
@@ -92,26 +91,18 @@ TEST(VolumeBalance, ResetStartsFromTheCurrentStorage) {
   EXPECT_EQ(b.storage_change(), 0.0);
 }
 
-TEST(Probes, SampleAtExactlyTheRequestedTimes) {
+TEST(AdvanceTo, LandsExactlyOnTheEndTime) {
   Canal canal;
   ASSERT_TRUE(canal.add_reach(reach(5.0, 100, {0.08, 0.0}, 0.06, 0.0005)));
   canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.001));
   canal.set_boundary(0, End::downstream, std::make_shared<CriticalDepthBoundary>());
-  const int p = canal.add_probe({0, 4.9, Quantity::depth, 0.1});
-  const int q = canal.add_probe({0, 0.0, Quantity::discharge, 0.037, 0.5});
-  ASSERT_GE(p, 0);
-  ASSERT_GE(q, 0);
-  ASSERT_TRUE(canal.advance_to(3.0));
-  const ProbeSamples& s = canal.probe_samples(p);
-  ASSERT_EQ(s.time.size(), 31u);
-  for (std::size_t k = 0; k < s.time.size(); ++k) EXPECT_EQ(s.time[k], static_cast<double>(k) * 0.1);
-  EXPECT_EQ(canal.probe_samples(q).time.front(), 0.5);
-  for (std::size_t k = 0; k < canal.probe_samples(q).time.size(); ++k)
-    EXPECT_EQ(canal.probe_samples(q).time[k], 0.5 + static_cast<double>(k) * 0.037);
-  EXPECT_EQ(canal.time(), 3.0);
+  for (double t : {0.1, 0.237, 3.0}) {
+    ASSERT_TRUE(canal.advance_to(t));
+    EXPECT_EQ(canal.time(), t);
+  }
 }
 
-TEST(Probes, InterpolateLinearlyBetweenCellCentres) {
+TEST(Sample, InterpolatesLinearlyBetweenCellCentres) {
   ReachSpec spec = reach(1.0, 4, {1.0, 0.0}, 0.0);
   spec.initial_depth = {1.0, 2.0, 3.0, 4.0};
   spec.initial_discharge = {0.5, 1.0, 1.5, 2.0};
@@ -123,15 +114,6 @@ TEST(Probes, InterpolateLinearlyBetweenCellCentres) {
   EXPECT_DOUBLE_EQ(canal.sample(0, 0.375, Quantity::velocity), 0.5);
   EXPECT_DOUBLE_EQ(canal.sample(0, 0.625, Quantity::area), 3.0);
   EXPECT_NEAR(canal.sample(0, 0.125, Quantity::froude), 0.5 / std::sqrt(g), 1e-15);
-}
-
-TEST(Probes, InvalidProbeIsRejectedNamingTheField) {
-  Canal canal;
-  ASSERT_TRUE(canal.add_reach(reach(5.0, 10, {0.08, 0.0}, 0.06)));
-  EXPECT_NE(canal.validate_probe({0, 6.0, Quantity::depth, 0.1}).message().find("ProbeSpec::x"), std::string::npos);
-  EXPECT_NE(canal.validate_probe({0, 1.0, Quantity::depth, 0.0}).message().find("ProbeSpec::period"), std::string::npos);
-  EXPECT_NE(canal.validate_probe({3, 1.0, Quantity::depth, 0.1}).message().find("ProbeSpec::reach"), std::string::npos);
-  EXPECT_EQ(canal.add_probe({0, 6.0, Quantity::depth, 0.1}), -1);
 }
 
 TEST(MultiReach, TwoLinkedReachesAtRestOverABedStepStayAtRestAndConserveVolume) {

@@ -1,0 +1,157 @@
+// `canalsim linearize SCENARIO -e EXPERIMENT [--freq LO:HI:N] [--input gate|inflow|offtake:I]
+// [--output y_dwe|y_dw|q|y_checkI] [--json F] [--csv F]`: the frequency response of the
+// linearised canal at the experiment's steady state (docs/linearization.md).
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/checks.hpp"
+#include "cli/commands.hpp"
+#include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/format.hpp"
+#include "linearize/linearize.hpp"
+#include "scenarios/builtin.hpp"
+
+namespace canalsim::cli {
+namespace {
+
+struct LinearizeArguments {
+  std::string scenario, experiment;
+  std::string freq, input = "gate", output = "y_dwe";
+  std::string json, csv;
+  int poles = 6;
+};
+
+double phase_degrees(std::complex<double> g) { return std::arg(g) * 180.0 / M_PI; }
+
+// Unwrapped phase [deg] along the grid (continuous through ±180°).
+std::vector<double> unwrapped_phase(const std::vector<std::complex<double>>& g) {
+  std::vector<double> phase(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    phase[k] = phase_degrees(g[k]);
+    if (k > 0) {
+      while (phase[k] - phase[k - 1] > 180.0) phase[k] -= 360.0;
+      while (phase[k] - phase[k - 1] < -180.0) phase[k] += 360.0;
+    }
+  }
+  return phase;
+}
+
+std::string csv_text(const linearize::FrequencyResponse& r) {
+  std::ostringstream out;
+  out << "omega_rad_s,gain,phase_deg,real,imag\n";
+  const auto phase = unwrapped_phase(r.response);
+  for (std::size_t k = 0; k < r.omega.size(); ++k) {
+    out << format_g(r.omega[k], 10) << ',' << format_g(std::abs(r.response[k]), 10) << ','
+        << format_g(phase[k], 10) << ',' << format_g(r.response[k].real(), 10) << ','
+        << format_g(r.response[k].imag(), 10) << '\n';
+  }
+  return out.str();
+}
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(format_g(v)); }
+
+std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArguments& args) {
+  nlohmann::json j;
+  j["scenario"] = args.scenario;
+  j["experiment"] = args.experiment;
+  j["input"] = {{"name", r.input_name}, {"unit", r.input_unit}};
+  j["output"] = {{"name", r.output_name}, {"unit", r.output_unit}};
+  j["operating_point"] = r.steady_state;
+  j["states"] = r.system.A.rows();
+  j["nyquist_rad_s"] = r.system.nyquist;
+  j["static_gain"] = number(r.static_gain);
+  j["delay_s"] = r.delay_s;
+  j["sensor_delay_s"] = r.system.output_delay_s;
+  for (const auto& p : r.poles) j["poles"].push_back({{"real", p.real()}, {"imag", p.imag()}});
+  if (r.band_fit) {
+    const auto& f = *r.band_fit;
+    j["prbs_band"] = {{"low_rad_s", r.band->low}, {"high_rad_s", r.band->high}, {"points", f.points},
+                      {"lfom", {{"K", f.gain}, {"T", f.time}, {"lambda", f.order}, {"L_s", f.delay},
+                                {"rms_relative_error", f.rms_relative_error}}},
+                      {"liom_rms_relative_error", f.integer_rms_relative_error}};
+  }
+  const auto phase = unwrapped_phase(r.response);
+  for (std::size_t k = 0; k < r.omega.size(); ++k) {
+    j["response"].push_back({{"omega_rad_s", r.omega[k]}, {"gain", number(std::abs(r.response[k]))},
+                             {"phase_deg", phase[k]}, {"real", number(r.response[k].real())},
+                             {"imag", number(r.response[k].imag())}});
+  }
+  return j.dump(1) + "\n";
+}
+
+void print_summary(const linearize::FrequencyResponse& r, const LinearizeArguments& args) {
+  std::cout << args.scenario << " / " << args.experiment << ": " << r.output_name << " [" << r.output_unit
+            << "] per " << r.input_name << " [" << r.input_unit << "], " << r.system.A.rows() << " states, "
+            << r.steady_state << "\n";
+  std::cout << "  static gain     " << format_g(r.static_gain) << "\n";
+  std::cout << "  delay (phase)   " << format_g(r.delay_s) << " s\n";
+  std::cout << "  Nyquist         " << format_g(r.system.nyquist) << " rad/s\n";
+  if (r.band_fit) {
+    const auto& f = *r.band_fit;
+    std::cout << "  PRBS band       " << format_g(r.band->low, 3) << " to " << format_g(r.band->high, 3)
+              << " rad/s: LFOM K e^(-Ls)/(T s^lambda + 1) fitted to G: K = " << format_g(f.gain, 4)
+              << ", T = " << format_g(f.time, 4) << ", lambda = " << format_fixed(f.order, 3) << ", L = "
+              << format_g(f.delay, 4) << " s, rms relative error " << format_fixed(100.0 * f.rms_relative_error, 2)
+              << " % (lambda = 1: " << format_fixed(100.0 * f.integer_rms_relative_error, 2) << " %)\n";
+  }
+  std::cout << "  poles nearest the imaginary axis [1/s]:";
+  for (const auto& p : r.poles) std::cout << "  " << format_g(p.real(), 4) << (p.imag() >= 0 ? "+" : "") << format_g(p.imag(), 4) << "i";
+  std::cout << "\n  omega [rad/s]      gain    phase [deg]\n";
+  const auto phase = unwrapped_phase(r.response);
+  const std::size_t step = std::max<std::size_t>(1, r.omega.size() / 10);
+  for (std::size_t k = 0; k < r.omega.size(); k += step) {
+    std::cout << "  " << format_g(r.omega[k], 4) << "  " << format_g(std::abs(r.response[k]), 5) << "  "
+              << format_fixed(phase[k], 1) << "\n";
+  }
+}
+
+void run(const LinearizeArguments& args) {
+  // Every flag is checked before the work.
+  linearize::LinearizeOptions options;
+  options.input = linearize::parse_input(args.input, "--input");
+  options.output = linearize::parse_output(args.output, "--output");
+  if (!args.freq.empty()) options.grid = linearize::parse_grid(args.freq, "--freq");
+  options.poles = args.poles;
+  if (!args.json.empty()) check_output_file("--json", args.json);
+  if (!args.csv.empty()) check_output_file("--csv", args.csv);
+  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  const auto* e = s.find_experiment(args.experiment);
+  if (!e) {
+    std::string names;
+    for (const auto& x : s.experiments) names += (names.empty() ? "" : ", ") + x.name;
+    throw InputError("--experiment " + args.experiment + ": scenario '" + s.name + "' has no such experiment (experiments: " + names + ")");
+  }
+  const linearize::FrequencyResponse r = linearize::linearize(s, *e, options);
+  for (const auto& g : r.response) {
+    if (!std::isfinite(std::abs(g))) {
+      throw InputError("--freq: the grid hits an undamped mode of the linearised canal (G(iω) infinite); move the grid");
+    }
+  }
+  if (!args.json.empty()) write_file_atomically(args.json, json_text(r, args));
+  if (!args.csv.empty()) write_file_atomically(args.csv, csv_text(r));
+  print_summary(r, args);
+}
+
+}  // namespace
+
+void add_linearize_command(CLI::App& app) {
+  auto args = std::make_shared<LinearizeArguments>();
+  auto* cmd = app.add_subcommand("linearize", "Frequency response of the linearised canal at an experiment's steady state");
+  cmd->add_option("scenario", args->scenario, "Built-in scenario name (see `canalsim scenarios`) or TOML file")->required();
+  cmd->add_option("--experiment,-e", args->experiment, "Experiment whose operating point is linearised")->required();
+  cmd->add_option("--freq", args->freq, "Log grid LO:HI:N of angular frequencies [rad/s] (default: 1e-4 to 0.5 of the grid's Nyquist frequency, 200 points)");
+  cmd->add_option("--input", args->input, "gate (the controlled gate's opening, m), inflow (m3/s) or offtake:I (m3/s)");
+  cmd->add_option("--output", args->output, "y_dwe, y_dw (level sensors, m), q (controlled gate discharge, m3/s) or y_checkI (check depth of pool I, m)");
+  cmd->add_option("--poles", args->poles, "How many poles nearest the imaginary axis to report")->check(integer_in(0, 50, "a number of poles"));
+  cmd->add_option("--json", args->json, "Write the response, gain, poles and delay as JSON");
+  cmd->add_option("--csv", args->csv, "Write omega_rad_s,gain,phase_deg,real,imag as CSV");
+  cmd->callback([args] { run(*args); });
+}
+
+}  // namespace canalsim::cli

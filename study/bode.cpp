@@ -1,0 +1,217 @@
+#include "study/bode.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/format.hpp"
+#include "core/html.hpp"
+#include "linearize/linearize.hpp"
+#include "reduced_models/frequency.hpp"
+
+namespace canalsim::study {
+namespace {
+
+using Complex = std::complex<double>;
+
+const FitResult* fit_for(const StudyResult& r, ModelKind kind, const std::string& experiment) {
+  for (const auto& t : r.tables) {
+    if (t.spec.kind != kind) continue;
+    for (std::size_t k = 0; k < t.spec.experiments.size() && k < t.fits.size(); ++k) {
+      if (t.spec.experiments[k] == experiment) return &t.fits[k];
+    }
+  }
+  return nullptr;
+}
+
+double rms_relative(const std::vector<Complex>& model, const std::vector<Complex>& truth) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < truth.size(); ++k) sum += std::norm(model[k] / truth[k] - 1.0);
+  return std::sqrt(sum / static_cast<double>(truth.size()));
+}
+
+std::string percent(double fraction) { return format_fixed(100.0 * fraction, 1) + " %"; }
+
+// Phase [deg] unwrapped along the grid.
+std::vector<double> unwrapped_degrees(const std::vector<Complex>& g) {
+  std::vector<double> p(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    p[k] = std::arg(g[k]) * 180.0 / M_PI;
+    if (k > 0) {
+      while (p[k] - p[k - 1] > 180.0) p[k] -= 360.0;
+      while (p[k] - p[k - 1] < -180.0) p[k] += 360.0;
+    }
+  }
+  return p;
+}
+
+// One SVG panel: curves y(log ω) scaled into a 640 x 220 box with the band's ends on the axis.
+std::string svg_panel(const std::vector<double>& omega, const std::vector<std::vector<double>>& curves,
+                      const std::string& y_label) {
+  const char* colours[] = {"#000000", "#1f77b4", "#d62728"};
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& c : curves) {
+    for (double v : c) {
+      if (!std::isfinite(v)) continue;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  if (!(hi > lo)) hi = lo + 1.0;
+  const double w = 640, h = 220, left = 60, bottom = 30;
+  const double x0 = std::log10(omega.front()), x1 = std::log10(omega.back());
+  auto px = [&](double om) { return left + (w - left - 10) * (std::log10(om) - x0) / (x1 - x0); };
+  auto py = [&](double v) { return 10 + (h - bottom - 10) * (hi - v) / (hi - lo); };
+  std::ostringstream svg;
+  svg << "<svg width=\"" << w << "\" height=\"" << h << "\" xmlns=\"http://www.w3.org/2000/svg\">"
+      << "<rect x=\"" << left << "\" y=\"10\" width=\"" << w - left - 10 << "\" height=\"" << h - bottom - 10
+      << "\" fill=\"none\" stroke=\"#999\"/>";
+  for (int decade = static_cast<int>(std::ceil(x0)); decade <= static_cast<int>(std::floor(x1)); ++decade) {
+    const double x = px(std::pow(10.0, decade));
+    svg << "<line x1=\"" << x << "\" y1=\"10\" x2=\"" << x << "\" y2=\"" << h - bottom << "\" stroke=\"#ddd\"/>"
+        << "<text x=\"" << x << "\" y=\"" << h - 12 << "\" font-size=\"11\" text-anchor=\"middle\">1e"
+        << decade << "</text>";
+  }
+  svg << "<text x=\"4\" y=\"14\" font-size=\"11\">" << format_g(hi, 3) << "</text><text x=\"4\" y=\""
+      << h - bottom << "\" font-size=\"11\">" << format_g(lo, 3) << "</text><text x=\"4\" y=\"" << h / 2
+      << "\" font-size=\"11\">" << html::escape(y_label) << "</text>";
+  for (std::size_t c = 0; c < curves.size(); ++c) {
+    svg << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[c % 3] << "\" points=\"";
+    for (std::size_t k = 0; k < omega.size(); ++k) {
+      if (std::isfinite(curves[c][k])) svg << format_g(px(omega[k]), 5) << "," << format_g(py(curves[c][k]), 5) << " ";
+    }
+    svg << "\"/>";
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+}  // namespace
+
+std::string fractionality_sentence(const BodeSection& b) {
+  const auto& f = b.pde_fit;
+  std::ostringstream s;
+  s << "At " << b.experiment << " (" << format_g(b.operating_opening_mm, 3) << " mm) the linearised pool ";
+  if (f.rms_relative_error > 0.10) {
+    s << "is not a first-order lag of any order in the PRBS band: the LFOM fitted to its response is "
+      << percent(f.rms_relative_error) << " off (λ = " << format_fixed(f.order, 2) << "; λ = 1: "
+      << percent(f.integer_rms_relative_error) << ")";
+  } else if (f.order < 0.9 && f.rms_relative_error <= 0.7 * f.integer_rms_relative_error) {
+    s << "is fractional in the PRBS band with λ = " << format_fixed(f.order, 2) << " (LFOM fitted to its response "
+      << percent(f.rms_relative_error) << " off, λ = 1: " << percent(f.integer_rms_relative_error) << ")";
+  } else {
+    s << "is a first-order lag in the PRBS band (λ = " << format_fixed(f.order, 2) << ", "
+      << percent(f.rms_relative_error) << " off; λ = 1: " << percent(f.integer_rms_relative_error) << ")";
+  }
+  s << "; its gain changes by " << format_fixed(b.gain_change_db, 1) << " dB across the band. The LFOM fitted to the "
+    << "recording (λ = " << format_fixed(b.fitted_lfom_lambda, 2) << ") is " << percent(b.lfom_error)
+    << " from the pool's response there, the LIOM " << percent(b.liom_error) << ".";
+  return s.str();
+}
+
+std::vector<BodeSection> bode_sections(const scenarios::Scenario& scenario, const StudyResult& r) {
+  std::vector<BodeSection> sections;
+  for (const auto& t : r.tables) {
+    if (t.spec.kind != ModelKind::liom) continue;
+    for (const auto& name : t.spec.experiments) {
+      const FitResult* liom = fit_for(r, ModelKind::liom, name);
+      const FitResult* lfom = fit_for(r, ModelKind::lfom, name);
+      const auto* e = scenario.find_experiment(name);
+      if (!liom || !lfom || !e || e->input.kind != scenarios::InputKind::prbs) continue;
+      const linearize::FrequencyResponse pde = linearize::linearize(scenario, *e, {});
+      if (!pde.band || !pde.band_fit) continue;
+      BodeSection b;
+      b.experiment = name;
+      b.operating_opening_mm = e->operating_opening_mm;
+      b.band = *pde.band;
+      b.omega = linearize::log_grid({b.band.low, b.band.high, 200});
+      b.pde = linearize::frequency_response(pde.system, b.omega);
+      for (double w : b.omega) {
+        b.liom.push_back(reduced::frequency_response(liom->model, {}, w));
+        b.lfom.push_back(reduced::frequency_response(lfom->model, {}, w));
+      }
+      b.liom_error = rms_relative(b.liom, b.pde);
+      b.lfom_error = rms_relative(b.lfom, b.pde);
+      b.fitted_lfom_lambda = lfom->model.p.lambda;
+      b.gain_change_db = 20.0 * std::log10(std::abs(b.pde.back()) / std::abs(b.pde.front()));
+      b.pde_fit = *pde.band_fit;
+      b.sentence = fractionality_sentence(b);
+      sections.push_back(std::move(b));
+    }
+  }
+  return sections;
+}
+
+nlohmann::json bode_json(const std::vector<BodeSection>& sections) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& b : sections) {
+    nlohmann::json j;
+    j["experiment"] = b.experiment;
+    j["operating_opening_mm"] = b.operating_opening_mm;
+    j["band_rad_s"] = {b.band.low, b.band.high};
+    j["pde_band_lfom"] = {{"K", b.pde_fit.gain}, {"T", b.pde_fit.time}, {"lambda", b.pde_fit.order},
+                          {"L_s", b.pde_fit.delay}, {"rms_relative_error", b.pde_fit.rms_relative_error},
+                          {"lambda1_rms_relative_error", b.pde_fit.integer_rms_relative_error}};
+    j["liom_vs_pde_rms_relative_error"] = b.liom_error;
+    j["lfom_vs_pde_rms_relative_error"] = b.lfom_error;
+    j["sentence"] = b.sentence;
+    for (std::size_t k = 0; k < b.omega.size(); ++k) {
+      j["response"].push_back({{"omega_rad_s", b.omega[k]},
+                               {"pde", {b.pde[k].real(), b.pde[k].imag()}},
+                               {"liom", {b.liom[k].real(), b.liom[k].imag()}},
+                               {"lfom", {b.lfom[k].real(), b.lfom[k].imag()}}});
+    }
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
+std::string bode_markdown(const std::vector<BodeSection>& sections) {
+  std::ostringstream md;
+  md << "# Bode: the linearised pool against the fitted LIOM and LFOM\n\n"
+     << "Gate → y_dwe in mm/mm over each experiment's PRBS band, the pool linearised at its steady state "
+        "(`canalsim linearize`, docs/linearization.md); gain and phase (delay included) at 12 of the 200 "
+        "frequencies compared.\n\n";
+  for (const auto& b : sections) {
+    md << "## " << b.experiment << " (" << format_g(b.operating_opening_mm, 3) << " mm), band "
+       << format_g(b.band.low, 3) << "–" << format_g(b.band.high, 3) << " rad/s\n\n"
+       << b.sentence << "\n\n| ω [rad/s] | PDE gain | LIOM gain | LFOM gain | PDE phase ° | LIOM phase ° | LFOM phase ° |\n"
+       << "|---:|---:|---:|---:|---:|---:|---:|\n";
+    // Phases unwrapped along the whole grid, then sampled.
+    const auto pp = unwrapped_degrees(b.pde), pi = unwrapped_degrees(b.liom), pf = unwrapped_degrees(b.lfom);
+    for (std::size_t k = 0; k < b.omega.size(); k += std::max<std::size_t>(1, b.omega.size() / 12)) {
+      md << "| " << format_g(b.omega[k], 3) << " | " << format_g(std::abs(b.pde[k]), 3) << " | "
+         << format_g(std::abs(b.liom[k]), 3) << " | " << format_g(std::abs(b.lfom[k]), 3) << " | "
+         << format_fixed(pp[k], 0) << " | " << format_fixed(pi[k], 0) << " | " << format_fixed(pf[k], 0) << " |\n";
+    }
+    md << "\n";
+  }
+  return md.str();
+}
+
+std::string bode_html(const std::vector<BodeSection>& sections) {
+  std::ostringstream page;
+  page << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Bode: the linearised pool and the fitted "
+          "models</title></head><body style=\"font-family:sans-serif;max-width:700px\">"
+       << "<h1>Bode: the linearised pool against the fitted LIOM and LFOM</h1><p>Gate → y_dwe in mm/mm over each "
+          "experiment's PRBS band (docs/linearization.md). <span style=\"color:#000\">PDE (linearised)</span>, "
+          "<span style=\"color:#1f77b4\">LIOM</span>, <span style=\"color:#d62728\">LFOM</span> fitted to the "
+          "recording.</p>";
+  for (const auto& b : sections) {
+    auto db = [](const std::vector<Complex>& g) {
+      std::vector<double> out;
+      for (const auto& v : g) out.push_back(20.0 * std::log10(std::abs(v)));
+      return out;
+    };
+    page << "<h2>" << html::escape(b.experiment) << " (" << format_g(b.operating_opening_mm, 3) << " mm)</h2><p>"
+         << html::escape(b.sentence) << "</p>"
+         << svg_panel(b.omega, {db(b.pde), db(b.liom), db(b.lfom)}, "dB")
+         << svg_panel(b.omega, {unwrapped_degrees(b.pde), unwrapped_degrees(b.liom), unwrapped_degrees(b.lfom)}, "deg")
+         << "<p style=\"font-size:small\">ω [rad/s], " << format_g(b.band.low, 3) << " to " << format_g(b.band.high, 3)
+         << "</p>";
+  }
+  page << "</body></html>\n";
+  return page.str();
+}
+
+}  // namespace canalsim::study
