@@ -27,7 +27,11 @@ bool is_level(const std::string& channel) {
 }
 
 SensorModel sensor_model_of(const scenarios::SensorSpec& sensors) {
-  return SensorModel{sensors.resolution_mm, sensors.delay_s, sensors.offset_mm};
+  SensorModel m{sensors.resolution_mm, sensors.delay_s, sensors.offset_mm};
+  if (sensors.offset_y_up_mm != 0.0) m.channel_offset_mm[columns::upstream_level] = sensors.offset_y_up_mm;
+  if (sensors.offset_y_dw_mm != 0.0) m.channel_offset_mm[columns::level_below_gate] = sensors.offset_y_dw_mm;
+  if (sensors.offset_y_dwe_mm != 0.0) m.channel_offset_mm[columns::level_downstream_end] = sensors.offset_y_dwe_mm;
+  return m;
 }
 
 double expected_reading(double y, double resolution, double spread) {
@@ -58,9 +62,11 @@ Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
       out[name] = y;
       continue;
     }
+    const auto own = m.channel_offset_mm.find(name);
+    const double offset = m.offset_mm + (own == m.channel_offset_mm.end() ? 0.0 : own->second);
     std::vector<double> v(y.size());
     for (std::size_t k = 0; k < y.size(); ++k) {
-      const double level = at_fractional(y, static_cast<double>(k) - shift) + m.offset_mm;
+      const double level = at_fractional(y, static_cast<double>(k) - shift) + offset;
       v[k] = m.reading_spread_mm > 0.0 ? expected_reading(level, m.resolution_mm, m.reading_spread_mm)
                                        : laws::quantise(level, m.resolution_mm);
     }

@@ -29,6 +29,8 @@ struct SensorModel {
   // the mean-square-best prediction of a quantised reading at every σ (σ → 0 gives Q(y),
   // σ ≫ r gives y).
   double reading_spread_mm = 0.0;
+  // Offsets of single level channels (y_up_mm, y_dw_mm, y_dwe_mm), added to offset_mm.
+  std::map<std::string, double> channel_offset_mm = {};
 };
 
 // E[Q(y + ε)] for Q(v) = r·nint(v/r) and ε ~ N(0, σ²): Σ_m m r P(the reading is m r).

@@ -78,6 +78,51 @@ Recording clocked_drive(const Recording& rec, double op, const std::vector<doubl
   return drive;
 }
 
+// The clocked command drive with the recorded upstream level added: rows at every sample instant
+// (levels as recorded, the command held) and at every switch instant (levels interpolated), so
+// that the level follows the samples while the command switches at the reconstructed clock.
+Recording clocked_drive_with_upstream(const Recording& rec, const Recording& clocked, double period) {
+  const std::vector<double>& t = rec.column(columns::time);
+  const std::vector<double>& y = rec.column(columns::upstream_level);
+  const std::vector<double>& ct = clocked.column(columns::time);
+  const std::vector<double>& cu = clocked.column(columns::gate_command);
+  std::vector<double> times(ct);
+  for (double x : t) times.push_back(x - t.front());
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end(), [&](double a, double b) { return b - a < 1e-9 * period; }),
+              times.end());
+  std::vector<double> u(times.size()), level(times.size());
+  std::size_t j = 0, k = 0;
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    while (j + 1 < ct.size() && ct[j + 1] <= times[i] + 1e-12) ++j;
+    u[i] = cu[j];
+    const double at = times[i] + t.front();
+    while (k + 1 < t.size() && t[k + 1] <= at) ++k;
+    const double f = k + 1 < t.size() ? std::clamp((at - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0) : 0.0;
+    level[i] = k + 1 < t.size() ? y[k] + f * (y[k + 1] - y[k]) : y[k];
+  }
+  Recording drive = clocked;
+  drive.names = {columns::time, columns::gate_command, columns::upstream_level};
+  drive.columns = {times, u, level};
+  return drive;
+}
+
+// Where the recording starts (Replay::initial_upstream_mm).
+double initial_upstream(const Recording& rec) {
+  const std::string meta = rec.meta("initial_y_up_mm");
+  char* end = nullptr;
+  const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
+  if (!meta.empty() && end && *end == '\0' && std::isfinite(parsed)) return parsed;
+  if (!rec.has(columns::upstream_level)) return std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double>& t = rec.column(columns::time);
+  const std::vector<double>& u = rec.column(columns::gate_command);
+  const std::vector<double>& y = rec.column(columns::upstream_level);
+  double sum = 0.0;
+  std::size_t k = 0;
+  for (; k < y.size() && (k == 0 || (u[k] == u[0] && t[k] - t[0] <= 1.0)); ++k) sum += y[k];
+  return sum / static_cast<double>(k);
+}
+
 }  // namespace
 
 const scenarios::GateSpec* controlled_gate(const Scenario& s) {
@@ -110,19 +155,31 @@ Replay prepare_replay(const Recording& rec, const Scenario& scenario, const Repl
     if (rec.has(c)) p.data[c] = tail(rec.column(c));
   }
   p.operating_point_mm = operating_point(rec, scenario);
+  p.initial_upstream_mm = initial_upstream(rec);
   p.drive = sampled_drive(rec, p.operating_point_mm, o.command_lead_samples * period, period);
   const bool upstream_replayed = o.use_recorded_upstream && rec.has(columns::upstream_level);
-  if (o.reconstruct_clock && !upstream_replayed) {
+  if (o.reconstruct_clock && (!upstream_replayed || o.clock_with_upstream)) {
     const std::vector<double> switches = command_switch_times(t, u);
     if (!switches.empty()) {
       p.drive = clocked_drive(rec, p.operating_point_mm, switches, period);
+      if (upstream_replayed) p.drive = clocked_drive_with_upstream(rec, p.drive, period);
       p.clocked = true;
     }
   }
   return p;
 }
 
-Channels replay_true(const Scenario& s, const Replay& p, const ReplayOptions& o) {
+Channels replay_true(const Scenario& scenario, const Replay& p, const ReplayOptions& o) {
+  const bool own_start = o.start_at_recorded_level && std::isfinite(p.initial_upstream_mm) &&
+                         (scenario.upstream.kind == scenarios::UpstreamKind::level ||
+                          scenario.upstream.kind == scenarios::UpstreamKind::reservoir);
+  Scenario started;
+  if (own_start) {
+    started = scenario;
+    const double offset = scenario.sensors.offset_mm + scenario.sensors.offset_y_up_mm;
+    started.upstream.level_m = std::max(1e-4, (p.initial_upstream_mm - offset) * 1e-3);
+  }
+  const Scenario& s = own_start ? started : scenario;
   scenarios::ExperimentSpec e;
   e.name = p.name;
   e.operating_opening_mm = p.operating_point_mm;
@@ -133,11 +190,24 @@ Channels replay_true(const Scenario& s, const Replay& p, const ReplayOptions& o)
   ideal.noise_std_mm = 0.0;
   ideal.delay_s = 0.0;
   ideal.offset_mm = 0.0;
+  ideal.offset_y_up_mm = ideal.offset_y_dw_mm = ideal.offset_y_dwe_mm = 0.0;
   e.sensors = ideal;
   scenarios::SimulateOptions so;
-  so.drive.recording = &p.drive;
   so.drive.use_recorded_upstream = o.use_recorded_upstream && p.drive.has(columns::upstream_level);
+  // The recorded upstream level less its sensor's offsets is the water level that feeds the gate.
+  const double up_offset = s.sensors.offset_mm + s.sensors.offset_y_up_mm;
+  Recording corrected;
+  if (so.drive.use_recorded_upstream && up_offset != 0.0) {
+    corrected = p.drive;
+    for (std::size_t c = 0; c < corrected.names.size(); ++c) {
+      if (corrected.names[c] != columns::upstream_level) continue;
+      for (double& v : corrected.columns[c]) v -= up_offset;
+    }
+  }
+  so.drive.recording = so.drive.use_recorded_upstream && up_offset != 0.0 ? &corrected : &p.drive;
   so.settle_time = o.settle_time_s;
+  so.warning = o.warning;
+  so.step_to_command_changes = o.step_to_command_changes;
   const Recording r = scenarios::simulate(s, e, so);
   Channels out;
   for (const auto& [c, y] : p.data) {

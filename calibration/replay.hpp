@@ -11,6 +11,8 @@
 // Replays are independent: run several with core/parallel.hpp parallel_for.
 #pragma once
 
+#include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,10 +36,23 @@ struct ReplayOptions {
   // consistent with every sampled change, the replay switches at the reconstructed instants
   // instead (command_switch_times), which removes the sampling jitter of the input.
   bool reconstruct_clock = true;
+  // Also when the recorded upstream level is replayed: the drive then holds rows at the sample
+  // and the switch instants (off keeps the diagnosis' sampled drive in that case).
+  bool clock_with_upstream = false;
   double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
   // Leading seconds of every recording left out of the compared series: what happened before
   // the recording started is unknown, so its first transient may differ.
   double warmup_s = 10.0;        // >= 0; at most a third of a recording is dropped
+  // Start each replay from the steady state at the recording's own first upstream level
+  // (Replay::initial_upstream_mm, less the scenario's y_up sensor offsets) instead of the
+  // scenario's upstream level_m (upstream kinds "level" and "reservoir").
+  bool start_at_recorded_level = false;
+  // End time steps at the command's switching instants (SimulateOptions::step_to_command_changes):
+  // the replay is then continuous in the scenario's parameters, which finite differences need.
+  bool step_to_command_changes = false;
+  // Called with a warning of the simulation (a failed steady state, see scenarios/simulate.hpp);
+  // unset, it is printed to stderr.
+  std::function<void(const std::string&)> warning;
 };
 
 // One recording made ready for replay.
@@ -51,6 +66,9 @@ struct Replay {
   bool clocked = false;       // the drive switches at reconstructed clock instants
   std::size_t n = 0, n_fit = 0;   // samples after the warm-up; the leading n_fit are fitted
   double period_s = 0.13;     // the scenario's sensor period
+  // Where the recording says it starts: its `initial_y_up_mm` metadata, else the mean recorded
+  // y_up_mm over the samples before the command first changes (at most 1 s); NaN without y_up.
+  double initial_upstream_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The gate a replay drives: the head gate when controlled, else the first controlled gate between

@@ -75,6 +75,7 @@ void add_all_commands(CLI::App& app) {
   add_reproduce_command(app);
   add_scenarios_command(app);
   add_simulate_command(app);
+  add_calibrate_command(app);
   add_diagnose_command(app);
   add_blindtest_command(app);
   add_linearize_command(app);

@@ -107,7 +107,10 @@ void apply_effect(Effect effect, double p, scenarios::Scenario& s, double inflow
       s.head_gate->actuator_speed_m_s = std::isfinite(p) ? p * kMm : 0.0;
       break;
     case Effect::gate_leakage: s.head_gate->leakage_m += p * kMm; break;
-    case Effect::discharge_coefficient: s.head_gate->discharge_coefficient *= p; break;
+    case Effect::discharge_coefficient:
+      s.head_gate->discharge_coefficient *= p;
+      if (s.head_gate->submerged_discharge_coefficient) *s.head_gate->submerged_discharge_coefficient *= p;
+      break;
     case Effect::friction:
       for (auto& pool : s.pools) pool.manning_n *= p;
       break;

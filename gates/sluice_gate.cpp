@@ -116,6 +116,10 @@ std::string SluiceGateOptions::validate() const {
     return range_problem("discharge_coefficient_multiplier", "(0, 10]",
                          discharge_coefficient_multiplier);
   }
+  if (submerged_discharge_coefficient_multiplier != 0.0 && !in_half_open(submerged_discharge_coefficient_multiplier, 0.0, 10.0)) {
+    return range_problem("submerged_discharge_coefficient_multiplier", "0 (= the free one) or (0, 10]",
+                         submerged_discharge_coefficient_multiplier);
+  }
   if (!in_half_open(simple_discharge_coefficient, 0.0, 2.0)) {
     return range_problem("simple_discharge_coefficient", "(0, 2]", simple_discharge_coefficient);
   }
@@ -249,7 +253,7 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const double floor = singular_floor * y1;
 
   if (options_.law == GateLaw::simple) {  // eq. (11)
-    const double coefficient = options_.discharge_coefficient_multiplier *
+    const double coefficient = options_.submerged_multiplier() *
                                options_.simple_discharge_coefficient;
     const double root = std::sqrt(2.0 * options_.gravity * head);
     out.q = coefficient * a_seen * root;
@@ -281,10 +285,15 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const double dF_dy3 = -dF_dD * dD_dhead + dF_dS * dS_dmargin * dylc_dy3;
   const double dF_da = dF_dS * dS_dmargin * dylc_dseen * dseen_da;
 
-  out.q = qf * F;
-  out.d_y1 = dqf_dy1 * F + qf * dF_dy1;
-  out.d_y3 = qf * dF_dy3;
-  out.d_a = dqf_da * F + qf * dF_da;
+  // Submerged multiplier relative to the free one, blended in F (header): q = qf F (rho + (1 - rho) F),
+  // dq/dF = qf (rho + 2 (1 - rho) F). rho = 1 leaves Swamee's law exactly as published.
+  const double rho = options_.submerged_multiplier() / options_.discharge_coefficient_multiplier;
+  const double blend = rho + (1.0 - rho) * F;
+  const double dblend = rho + 2.0 * (1.0 - rho) * F;
+  out.q = qf * F * blend;
+  out.d_y1 = dqf_dy1 * F * blend + qf * dF_dy1 * dblend;
+  out.d_y3 = qf * dF_dy3 * dblend;
+  out.d_a = dqf_da * F * blend + qf * dF_da * dblend;
   return out;
 }
 

@@ -80,6 +80,18 @@ struct SluiceGateOptions {
   // Multiplies the discharge coefficient of the law (1 = as published). Diagnosis scales it to
   // explain a gain mismatch. Range (0, 10].
   double discharge_coefficient_multiplier = 1.0;
+  // The multiplier in submerged flow (condition 10), range (0, 10]; 0 (the default) = the same
+  // as discharge_coefficient_multiplier. Swamee's law is least reliable near the regime border and near zero head, so
+  // calibration lets the two differ. The simple submerged law (eq. 11) uses it alone (it jumps at
+  // the border anyway). Swamee's law stays continuous: with the submergence factor F in [0, 1]
+  // (F = 1 at the border, 0 at zero head) the multiplier of submerged flow is
+  //   m(F) = m_s + (m_f - m_s) F,
+  // m_f at the border, tending to m_s as the flow drowns.
+  double submerged_discharge_coefficient_multiplier = 0.0;
+  double submerged_multiplier() const {
+    return submerged_discharge_coefficient_multiplier > 0.0 ? submerged_discharge_coefficient_multiplier
+                                                            : discharge_coefficient_multiplier;
+  }
   // Cd of the simple laws (paper eq. 9 and 11; "generally close to 0.6"). Range (0, 2].
   double simple_discharge_coefficient = 0.6;
   // Extra opening that leaks under a closed gate [m]. Range [0, 1].

@@ -60,6 +60,7 @@ gates::GateGeometry gate_geometry(const GateSpec& g) {
   // One meaning for both laws: a multiplier on the published coefficient (Swamee's; Cd = 0.6 of
   // the paper's eq. 9/11).
   geometry.law.discharge_coefficient_multiplier = g.discharge_coefficient;
+  geometry.law.submerged_discharge_coefficient_multiplier = g.submerged_coefficient();
   geometry.law.leakage_opening = g.leakage_m;
   return geometry;
 }

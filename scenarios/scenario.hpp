@@ -59,6 +59,9 @@ struct GateSpec {
   double opening_m = 0.0;           // initial (or fixed) opening
   GateLaw law = GateLaw::swamee;
   double discharge_coefficient = 1.0;  // multiplier on Swamee's law; Cd of the simple laws
+  // The multiplier in submerged flow (gates/sluice_gate.hpp); unset = discharge_coefficient.
+  std::optional<double> submerged_discharge_coefficient;
+  double submerged_coefficient() const { return submerged_discharge_coefficient.value_or(discharge_coefficient); }
   double leakage_m = 0.0;           // extra effective opening (a gate that does not seal)
   double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
   bool controlled = false;          // driven by the experiment's input signal
@@ -103,6 +106,8 @@ struct SensorSpec {
   double noise_std_mm = 0.0;        // Gaussian noise on level sensors
   double delay_s = 0.0;             // pure delay of the level sensors
   double offset_mm = 0.0;           // constant offset of the level sensors
+  // Offsets of single level sensors, added to offset_mm (each sensor has its own zero).
+  double offset_y_up_mm = 0.0, offset_y_dw_mm = 0.0, offset_y_dwe_mm = 0.0;
   double downstream_sensor_x_m = -1.0;  // position of y_dwe in the last pool; <0 = last cell
   double below_gate_sensor_x_m = 0.1;   // position of y_dw from the head gate
   std::uint64_t seed = 1;

@@ -40,6 +40,10 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
               ? GateLaw::swamee
               : GateLaw::simple;
   g.discharge_coefficient = t.number("discharge_coefficient", g.discharge_coefficient, {0.0, 5.0, true}, "");
+  if (t.has("submerged_discharge_coefficient")) {
+    g.submerged_discharge_coefficient =
+        t.number("submerged_discharge_coefficient", g.submerged_coefficient(), {0.0, 5.0, true}, "");
+  }
   g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 1.0}, "m");
   g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
   g.controlled = t.boolean("controlled", g.controlled);
@@ -125,6 +129,9 @@ SensorSpec read_sensors(TomlTable t, const SensorSpec& defaults) {
   s.noise_std_mm = t.number("noise_std_mm", s.noise_std_mm, {0.0, 100.0}, "mm");
   s.delay_s = t.number("delay_s", s.delay_s, {0.0, 600.0}, "s");
   s.offset_mm = t.number("offset_mm", s.offset_mm, {-1000.0, 1000.0}, "mm");
+  s.offset_y_up_mm = t.number("offset_y_up_mm", s.offset_y_up_mm, {-1000.0, 1000.0}, "mm");
+  s.offset_y_dw_mm = t.number("offset_y_dw_mm", s.offset_y_dw_mm, {-1000.0, 1000.0}, "mm");
+  s.offset_y_dwe_mm = t.number("offset_y_dwe_mm", s.offset_y_dwe_mm, {-1000.0, 1000.0}, "mm");
   s.downstream_sensor_x_m = t.number("downstream_sensor_x_m", s.downstream_sensor_x_m, {-1.0, 1.0e5}, "m (-1 = last cell)");
   s.below_gate_sensor_x_m = t.number("below_gate_sensor_x_m", s.below_gate_sensor_x_m, {0.0, 1.0e5}, "m");
   s.seed = t.seed("seed", s.seed);

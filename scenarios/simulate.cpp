@@ -318,6 +318,28 @@ struct InitialState {
   double progress_weight = 0.0;  // share of the run's progress spent settling
 };
 
+// Newton failed: the experiment starts from `marching` seconds of time marching instead. Never
+// silent — an error when the caller requires the steady state, else a warning naming the
+// opening held and the levels reached (first and last cell of every pool).
+void warn_marched_start(const BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options,
+                        const std::string& failure, double marching) {
+  const std::string what = s.source + ": experiment " + e.name + ": the steady state (Newton) failed (" + failure + ")";
+  if (options.require_steady_state) throw std::runtime_error(what);
+  std::string state = "the gate held at " + format_g(b.controlled->opening(-1e-9) / kMm) + " mm, levels";
+  for (int r = 0; r < b.canal.reach_count(); ++r) {
+    const auto& reach = b.canal.reach(r);
+    state += (r ? "; " : " ") + format_g(reach.level(0) / kMm) + " .. " +
+             format_g(reach.level(reach.cells() - 1) / kMm) + " mm";
+  }
+  const std::string message = what + "; it starts after " + format_g(marching) +
+                              " s of time marching instead, from " + state;
+  if (options.warning) {
+    options.warning(message);
+  } else {
+    std::fprintf(stderr, "canalsim: warning: %s\n", message.c_str());
+  }
+}
+
 // Brings the canal to the steady state of its operating point at t = 0 and presets the
 // reservoir PID so that the pump delivers the gate discharge. Newton first; then the experiment's
 // settle_s of unrecorded marching (the command held at its operating point), or, when Newton is
@@ -379,6 +401,7 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
     result.description = solved ? result.description + ", then " + marched
                                 : marched + (newton_failure.empty() ? "" : " (Newton: " + newton_failure + ")");
   }
+  if (!newton_failure.empty()) warn_marched_start(b, s, e, options, newton_failure, marching);
   b.canal.set_time(0.0);
   b.canal.reset_balance();
   b.controlled->reset(0.0, b.controlled->opening(0.0));
@@ -413,17 +436,18 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
                            : sensors.downstream_sensor_x_m;
   const double x_below = std::min(sensors.below_gate_sensor_x_m, b.canal.reach(0).length());
 
-  auto level_sensor = [&](std::uint64_t seed_offset) {
+  auto level_sensor = [&](std::uint64_t seed_offset, double own_offset_mm = 0.0) {
     SensorOptions o = SensorOptions::defaults_for(SensorKind::level);
     o.sample_period = h;
     o.resolution = sensors.resolution_mm * kMm;
     o.noise_std = sensors.noise_std_mm * kMm;
     o.delay = sensors.delay_s;
-    o.offset = sensors.offset_mm * kMm;
+    o.offset = (sensors.offset_mm + own_offset_mm) * kMm;
     o.seed = sensors.seed + seed_offset;
     return Sensor(o);
   };
-  Sensor y_dwe = level_sensor(0), y_dw = level_sensor(1), y_up = level_sensor(2);
+  Sensor y_dwe = level_sensor(0, sensors.offset_y_dwe_mm), y_dw = level_sensor(1, sensors.offset_y_dw_mm),
+         y_up = level_sensor(2, sensors.offset_y_up_mm);
   SensorOptions gate_options = SensorOptions::defaults_for(SensorKind::gate_position);
   gate_options.sample_period = h;
   Sensor x_up(gate_options);
@@ -455,6 +479,17 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   TrueState before = snapshot(), after = before;
   WallWatch walls(s);
   std::size_t next_event = 0;
+  // Instants at which the drive's command changes (SimulateOptions::step_to_command_changes).
+  std::vector<double> breaks;
+  if (options.step_to_command_changes && options.drive.recording) {
+    const auto& dt = options.drive.recording->column(columns::time);
+    const auto& du = options.drive.recording->column(columns::gate_command);
+    for (std::size_t i = 1; i < dt.size(); ++i) {
+      if (du[i] != du[i - 1] && dt[i] > 0.0) breaks.push_back(dt[i]);
+    }
+  }
+  std::size_t next_break = 0;
+  constexpr double just_after = 1e-9;  // s: the zero-order-hold command takes its new value from t_i on
   for (std::size_t k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * h;
     while (after.time < t) {
@@ -464,8 +499,11 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
       }
       const double to_event = next_event < e.events.size() ? e.events[next_event].t_s - b.canal.time()
                                                            : std::numeric_limits<double>::infinity();
+      while (next_break < breaks.size() && breaks[next_break] <= b.canal.time()) ++next_break;
+      const double to_break = next_break < breaks.size() ? breaks[next_break] - b.canal.time() + just_after
+                                                         : std::numeric_limits<double>::infinity();
       before = after;
-      check(b.canal.step(to_event), "experiment " + e.name);
+      check(b.canal.step(std::min(to_event, to_break)), "experiment " + e.name);
       guard.check(b.canal.statistics().steps, b.canal.time(), b.canal.time() - before.time);
       after = snapshot();
     }

@@ -79,6 +79,18 @@ struct SimulateOptions {
   bool use_steady_state_solver = true;
   // Past the ceilings of scenarios/run_cost.hpp (`--allow-long`).
   bool allow_long_run = false;
+  // When Newton fails: throw std::runtime_error naming the failure (true), or march for
+  // settle_time with the command held at its operating point and warn, naming the state the
+  // experiment then starts from (false). Never silent.
+  bool require_steady_state = false;
+  // End a time step at every instant the drive recording's command changes (just after it), so
+  // that the gate switches exactly then rather than at the first step boundary after it. The
+  // response is then continuous in the scenario's parameters (calibration differentiates it);
+  // off by default, which keeps earlier results bit for bit.
+  bool step_to_command_changes = false;
+  // Receives the failed-steady-state warning (one line, without the "canalsim: warning: "
+  // prefix); unset, it is printed to stderr.
+  std::function<void(const std::string&)> warning;
   // Called with the canal at the end of the run (tests read the volume balance and final state).
   std::function<void(const BuiltCanal&)> on_finish;
 };

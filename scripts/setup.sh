@@ -10,7 +10,7 @@ CANALSIM_PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsundials-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev
+  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev libceres-dev
   clang-14 libclang-rt-14-dev
 )
 

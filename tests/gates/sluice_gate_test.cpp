@@ -437,3 +437,69 @@ TEST(SwameeContinuity, WideOpenGateDischargeFallsContinuouslyToZeroHead) {
 
 }  // namespace
 }  // namespace canalsim::gates
+
+namespace canalsim::gates {
+namespace {
+
+// --- separate submerged coefficient ------------------------------------------------------------
+
+SluiceGate swamee_with(double free_multiplier, double submerged_multiplier) {
+  SluiceGateOptions options;
+  options.discharge_coefficient_multiplier = free_multiplier;
+  options.submerged_discharge_coefficient_multiplier = submerged_multiplier;
+  return SluiceGate(options);
+}
+
+TEST(SubmergedMultiplier, SwameeBlendsItWithTheSubmergenceFactorByHand) {
+  // q = m_f q_f F (rho + (1 - rho) F), rho = m_s / m_f, F by hand as in MatchesHandComputedFactor.
+  const double y1 = 0.06, y3 = 0.045, a = 0.02;
+  const double y_lc = 0.81 * y3 * std::pow(y3 / a, 0.72);
+  const double factor = std::pow(y1 - y3, 0.7) / (0.32 * std::pow(y_lc - y1, 0.7) + std::pow(y1 - y3, 0.7));
+  const double rho = 1.1 / 0.9;
+  EXPECT_NEAR(swamee_with(0.9, 1.1).discharge(y1, y3, a),
+              0.9 * swamee_free_discharge(y1, a) * factor * (rho + (1.0 - rho) * factor), 1e-16);
+}
+
+TEST(SubmergedMultiplier, LeavesFreeFlowAndTheBorderToTheFreeMultiplier) {
+  const SluiceGate split = swamee_with(0.9, 1.2), plain = swamee_with(0.9, 0.9);
+  EXPECT_EQ(split.discharge(0.06, 0.01, 0.02), plain.discharge(0.06, 0.01, 0.02));  // free
+  // Continuous across the border: the change over a step across it shrinks with the step as
+  // Swamee's own law does (its factor varies as (y_lc - y1)^0.7 there), i.e. no jump.
+  const double y3 = border_tailwater(0.06, 0.02);
+  for (double step : {1e-6, 1e-9, 1e-12}) {
+    const double split_change = std::abs(split.discharge(0.06, y3 + step, 0.02) - split.discharge(0.06, y3 - step, 0.02));
+    const double plain_change = std::abs(plain.discharge(0.06, y3 + step, 0.02) - plain.discharge(0.06, y3 - step, 0.02));
+    EXPECT_LE(split_change, 1.5 * plain_change + 1e-18) << step;
+  }
+  // Deeply drowned (F -> 0) the ratio of the two tends to m_s / m_f.
+  const double drowned = 0.06 - 1e-7;
+  EXPECT_NEAR(split.discharge(0.06, drowned, 0.02) / plain.discharge(0.06, drowned, 0.02), 1.2 / 0.9, 1e-3);
+}
+
+TEST(SubmergedMultiplier, EqualToTheFreeOneIsSwameeToTheLastBit) {
+  const SluiceGate same = swamee_with(1.0, 1.0), published;
+  for (double y3 : {0.03, 0.045, 0.055, 0.0599}) EXPECT_EQ(same.discharge(0.06, y3, 0.02), published.discharge(0.06, y3, 0.02));
+}
+
+TEST(SubmergedMultiplier, SimpleSubmergedLawUsesItAlone) {
+  SluiceGateOptions options;
+  options.law = GateLaw::simple;
+  options.discharge_coefficient_multiplier = 0.9;
+  options.submerged_discharge_coefficient_multiplier = 1.1;
+  // Eq. (11) with Cd = 1.1 * 0.6 (SubmergedFlowIsPaperEquation11 with m = 1.1).
+  EXPECT_NEAR(SluiceGate(options).discharge(0.06, 0.045, 0.02), 1.1 * 0.006509930875209045, 1e-15);
+}
+
+TEST(SubmergedMultiplier, DerivativesMatchCentralDifferences) {
+  expect_derivatives_match_central_differences(swamee_with(0.93, 1.12));
+  expect_derivatives_match_central_differences(swamee_with(1.05, 0.85));
+}
+
+TEST(SubmergedMultiplier, OutOfRangeIsRejectedNamingTheField) {
+  SluiceGateOptions options;
+  options.submerged_discharge_coefficient_multiplier = -0.5;
+  EXPECT_NE(options.validate().find("submerged_discharge_coefficient_multiplier"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canalsim::gates

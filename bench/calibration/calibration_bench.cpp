@@ -1,0 +1,59 @@
+// One calibration of the default parameter set (cd_free, cd_submerged, manning_n,
+// downstream_opening_mm, offset_y_dw_mm, offset_y_dwe_mm) on four 255.5 s laboratory recordings
+// (op1–op4), as `canalsim calibrate --scenario lab op1.csv ... -o cal.toml` runs it. The
+// recordings come from a truth the model cannot represent exactly: 1.5× the cells, minmod at
+// Courant 0.5, the six parameters perturbed, level noise 0.05 mm on the 0.05 mm quantisation.
+// Issue 12's target: at most 30 s on this 2-core machine. Counters: simulations, starts.
+#include <benchmark/benchmark.h>
+
+#include "calibration/calibrate.hpp"
+#include "scenarios/builtin.hpp"
+#include "scenarios/simulate.hpp"
+
+namespace {
+
+using namespace canalsim;
+
+std::vector<Recording> truth_recordings() {
+  scenarios::Scenario truth = scenarios::builtin_scenario("lab");
+  truth.pools.front().cells = 150;
+  truth.numerics.van_leer_limiter = false;
+  truth.numerics.cfl = 0.5;
+  truth.head_gate->discharge_coefficient = 0.9;
+  truth.head_gate->submerged_discharge_coefficient = 1.1;
+  truth.pools.front().manning_n *= 1.5;
+  truth.downstream.gate.opening_m += 1e-3;
+  truth.sensors.offset_y_dw_mm = 2.0;
+  truth.sensors.offset_y_dwe_mm = -1.5;
+  truth.sensors.noise_std_mm = 0.05;
+  std::vector<Recording> out;
+  for (const char* name : {"op1", "op2", "op3", "op4"}) {
+    Recording r = scenarios::simulate(truth, *truth.find_experiment(name));
+    r.source = std::string(name) + ".csv";
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+void BM_CalibrateDefaultSetOnFourLabRecordings(benchmark::State& state) {
+  const auto lab = scenarios::builtin_scenario("lab");
+  const auto recordings = truth_recordings();
+  calibration::CalibrateOptions options;
+  options.threads = 2;
+  options.starts = static_cast<int>(state.range(0));
+  calibration::Calibration c;
+  for (auto _ : state) {
+    c = calibration::calibrate(lab, recordings, {}, options);
+    benchmark::DoNotOptimize(c.parameters.data());
+  }
+  state.counters["simulations"] = c.simulations;
+  state.counters["iterations"] = c.iterations;
+  state.counters["cost_ratio"] = c.cost_before > 0.0 ? c.cost_after / c.cost_before : 0.0;
+  state.SetLabel(c.ok ? "ok" : c.message);
+}
+
+BENCHMARK(BM_CalibrateDefaultSetOnFourLabRecordings)->Arg(2)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,358 @@
+#include "calibration/calibrate.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "calibration/problem.hpp"
+#include "calibration/statistics.hpp"
+#include "core/errors.hpp"
+#include "core/format.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+using scenarios::Scenario;
+
+double cost_per_sample(const std::vector<double>& r) {
+  return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
+}
+
+// The least-squares problem as Ceres sees it: one residual block of all residuals on one
+// parameter block (the search coordinates). Jacobians by ReplayProblem's parallel forward
+// differences. A simulation that fails makes the point unusable (Ceres then shrinks its step).
+class ReplayCost : public ceres::CostFunction {
+ public:
+  explicit ReplayCost(ReplayProblem& problem) : problem_(problem) {
+    set_num_residuals(static_cast<int>(problem.residual_count()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(problem.parameters().size()));
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const std::size_t p = problem_.parameters().size();
+    const std::vector<double> z(parameters[0], parameters[0] + p);
+    try {
+      const std::vector<double> r = problem_.residuals(problem_.predict(z));
+      std::copy(r.begin(), r.end(), residuals);
+      if (jacobians && jacobians[0]) {
+        const std::vector<double> J = problem_.jacobian(z, r);
+        std::copy(J.begin(), J.end(), jacobians[0]);
+      }
+    } catch (const std::exception&) {
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  ReplayProblem& problem_;
+};
+
+class IterationProgress : public ceres::IterationCallback {
+ public:
+  IterationProgress(const ProgressCallback& progress, int run, int runs, int max_iterations)
+      : progress_(progress), run_(run), runs_(runs), max_(max_iterations) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (progress_) {
+      const double within = std::min(1.0, static_cast<double>(s.iteration + 1) / max_);
+      progress_({0.1 + 0.8 * (run_ + within) / runs_, "start " + std::to_string(run_ + 1) + "/" + std::to_string(runs_) +
+                                                          ", iteration " + std::to_string(s.iteration) + ", cost " +
+                                                          format_g(s.cost, 4)});
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const ProgressCallback& progress_;
+  int run_, runs_, max_;
+};
+
+struct Run {
+  std::vector<double> z;
+  double cost = std::numeric_limits<double>::infinity();
+  int iterations = 0;
+  std::string report;
+};
+
+Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, const CalibrateOptions& o, int run, int runs) {
+  ReplayCost cost(problem);
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem lsq(po);
+  lsq.AddResidualBlock(&cost, nullptr, z.data());
+  const auto& params = problem.parameters();
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    lsq.SetParameterLowerBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].low));
+    lsq.SetParameterUpperBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].high));
+  }
+  ceres::Solver::Options so;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = o.max_iterations;
+  so.num_threads = 1;  // the parallelism is in the simulations
+  so.logging_type = ceres::SILENT;
+  so.function_tolerance = 1e-6;
+  so.parameter_tolerance = 1e-5;
+  so.gradient_tolerance = 1e-10;
+  IterationProgress progress(o.progress, run, runs, o.max_iterations);
+  so.callbacks.push_back(&progress);
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &lsq, &summary);
+  Run out;
+  out.z = z;
+  out.iterations = static_cast<int>(summary.iterations.size());
+  out.report = summary.BriefReport();
+  if (summary.IsSolutionUsable()) out.cost = 2.0 * summary.final_cost / static_cast<double>(problem.residual_count());
+  return out;
+}
+
+// Points spread over the middle half of the bounds (a Kronecker sequence in the search
+// coordinates), ordered by cost; the ones whose simulation fails are dropped.
+std::vector<Run> screened_starts(ReplayProblem& problem, int count) {
+  const auto& params = problem.parameters();
+  std::vector<Run> out;
+  for (int k = 1; k <= count; ++k) {
+    Run r;
+    for (std::size_t j = 0; j < params.size(); ++j) {
+      const double alpha = std::sqrt(static_cast<double>(2 + 3 * j)) - std::floor(std::sqrt(static_cast<double>(2 + 3 * j)));
+      const double f = std::fmod(0.5 + k * alpha, 1.0);
+      const double lo = params[j].to_search(params[j].low), hi = params[j].to_search(params[j].high);
+      r.z.push_back(lo + (hi - lo) * (0.25 + 0.5 * f));
+    }
+    try {
+      r.cost = cost_per_sample(problem.residuals(problem.predict(r.z)));
+      out.push_back(std::move(r));
+    } catch (const std::exception&) {
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const Run& a, const Run& b) { return a.cost < b.cost; });
+  return out;
+}
+
+double nrmse_percent(const std::vector<double>& data, const std::vector<double>& model) {
+  const double mean = std::accumulate(data.begin(), data.end(), 0.0) / static_cast<double>(std::max<std::size_t>(data.size(), 1));
+  double e = 0.0, v = 0.0;
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    e += (data[k] - model[k]) * (data[k] - model[k]);
+    v += (data[k] - mean) * (data[k] - mean);
+  }
+  return v > 0.0 ? 100.0 * (1.0 - std::sqrt(e / v)) : 0.0;
+}
+
+double rms(const std::vector<double>& a, const std::vector<double>& b) {
+  double s = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
+  return a.empty() ? 0.0 : std::sqrt(s / static_cast<double>(a.size()));
+}
+
+void add_fits(const ReplayProblem& problem, const std::vector<Channels>& before, const std::vector<Channels>& after,
+              bool validation, Calibration& c) {
+  for (std::size_t i = 0; i < problem.replays().size(); ++i) {
+    const Replay& r = problem.replays()[i];
+    for (const auto& [channel, y] : r.data) {
+      if (!before[i].count(channel) || !after[i].count(channel) || !problem.weights().weight.count(channel)) continue;
+      const auto& b = before[i].at(channel);
+      const auto& a = after[i].at(channel);
+      c.fits.push_back({r.name, channel, validation, rms(y, b), rms(y, a), nrmse_percent(y, b), nrmse_percent(y, a)});
+      c.series.push_back({r.name, channel, validation, r.t, y, b, a});
+    }
+  }
+}
+
+// The optimum re-simulated on a grid with `factor` times the cells of every pool.
+// `shift`: how far the optimum moves (search coordinates) with the finer grid's residuals.
+GridCheck grid_check(ReplayProblem& problem, const std::vector<double>& z, const std::vector<Channels>& at_optimum,
+                     double cost, const std::vector<double>& J, const std::vector<double>& r, std::vector<double>& shift) {
+  GridCheck g;
+  Scenario refined = problem.scenario_at(z);
+  for (auto& pool : refined.pools) pool.cells *= g.factor;
+  const std::vector<Channels> fine = problem.predict(refined);
+  g.done = true;
+  g.cost = cost;
+  std::vector<double> residual_change = problem.residuals(fine);
+  g.refined_cost = cost_per_sample(residual_change);
+  for (std::size_t k = 0; k < residual_change.size(); ++k) residual_change[k] -= r[k];
+  shift = optimum_shift(J, residual_change, problem.parameters().size());
+  double change = 0.0, residual = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < fine.size(); ++i) {
+    for (const auto& [channel, y] : problem.replays()[i].data) {
+      if (!is_level(channel) || !fine[i].count(channel)) continue;
+      const auto& a = at_optimum[i].at(channel);
+      const auto& f = fine[i].at(channel);
+      for (std::size_t k = 0; k < y.size(); ++k) {
+        change += (f[k] - a[k]) * (f[k] - a[k]);
+        residual += (y[k] - a[k]) * (y[k] - a[k]);
+        ++n;
+      }
+    }
+  }
+  g.rms_change = n ? std::sqrt(change / static_cast<double>(n)) : 0.0;
+  g.residual_rms = n ? std::sqrt(residual / static_cast<double>(n)) : 0.0;
+  const double relative = g.cost > 0.0 ? (g.refined_cost - g.cost) / g.cost : 0.0;
+  if (g.rms_change > 0.5 * g.residual_rms) {
+    g.verdict = "the grid limits the fit: twice the cells move the levels by " + format_g(g.rms_change, 3) +
+                " mm RMS, comparable with the residual (" + format_g(g.residual_rms, 3) + " mm)";
+  } else {
+    g.verdict = "the grid does not limit the fit: twice the cells move the levels by " + format_g(g.rms_change, 3) +
+                " mm RMS against a residual of " + format_g(g.residual_rms, 3) + " mm (cost " +
+                (relative >= 0 ? "+" : "") + format_fixed(100.0 * relative, 1) + " %)";
+  }
+  return g;
+}
+
+// Recordings of another canal: a `scenario` metadata line naming another canal, or levels the
+// canal's walls could not hold. One line per recording, naming it and the difference.
+std::vector<std::string> other_canal_problems(const Scenario& s, const std::vector<Recording>& recordings) {
+  std::vector<std::string> problems;
+  const double wall_mm = (s.pools.empty() ? 1e9 : s.pools.back().wall_height_m) * 1e3;
+  for (const Recording& rec : recordings) {
+    const std::string name = rec.source.empty() ? "recording" : rec.source;
+    const std::string canal = rec.meta("scenario");
+    if (!canal.empty() && canal != s.name) {
+      problems.push_back(name + ": recorded on canal '" + canal + "', but the scenario is '" + s.name +
+                         "' (# scenario: metadata)");
+      continue;
+    }
+    for (const char* c : {columns::level_downstream_end, columns::level_below_gate}) {
+      if (!rec.has(c)) continue;
+      const auto [lo, hi] = std::minmax_element(rec.column(c).begin(), rec.column(c).end());
+      if (*lo < -1.0 || *hi > wall_mm) {
+        problems.push_back(name + ": " + c + " spans " + format_g(*lo, 4) + ".." + format_g(*hi, 4) +
+                           " mm, outside the " + format_g(wall_mm, 4) + " mm walls of " + s.name +
+                           ": not a recording of this canal");
+        break;
+      }
+    }
+  }
+  return problems;
+}
+
+}  // namespace
+
+ReplayOptions CalibrateOptions::default_replay() {
+  ReplayOptions r;
+  // The gate position is left out: no default parameter acts on it, and a simulated one is
+  // interpolated between solver steps across the command's jumps (a simulator's artefact).
+  r.channels = {columns::level_downstream_end, columns::level_below_gate, columns::upstream_level, columns::discharge};
+  r.use_recorded_upstream = true;
+  r.clock_with_upstream = true;
+  r.start_at_recorded_level = true;
+  r.step_to_command_changes = true;
+  r.fit_fraction = 1.0;
+  r.warmup_s = 0.0;
+  return r;
+}
+
+std::string CalibrateOptions::validate() const {
+  std::ostringstream out;
+  if (starts < 1 || starts > 10) out << "starts = " << starts << ": expected 1..10";
+  else if (screened_points < 0 || screened_points > 1000) out << "screened_points = " << screened_points << ": expected 0..1000";
+  else if (max_iterations < 1 || max_iterations > 500) out << "max_iterations = " << max_iterations << ": expected 1..500";
+  else if (threads < 1 || threads > 64) out << "threads = " << threads << ": expected 1..64";
+  else if (!(replay.fit_fraction > 0.0 && replay.fit_fraction <= 1.0)) out << "replay.fit_fraction = " << replay.fit_fraction << ": expected (0, 1]";
+  else if (!(replay.warmup_s >= 0.0)) out << "replay.warmup_s = " << replay.warmup_s << ": expected >= 0";
+  return out.str();
+}
+
+Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& recordings,
+                      const std::vector<Recording>& validation, const CalibrateOptions& o) {
+  if (const std::string problem = o.validate(); !problem.empty()) throw InputError("calibrate options: " + problem);
+  std::vector<Recording> all = recordings;
+  all.insert(all.end(), validation.begin(), validation.end());
+  std::vector<std::string> problems = check_recordings(scenario, all);
+  for (auto& p : other_canal_problems(scenario, all)) problems.push_back(std::move(p));
+  if (!problems.empty()) {
+    std::string line;
+    for (const auto& p : problems) line += (line.empty() ? "" : "; ") + p;
+    throw InputError(line);
+  }
+  if (recordings.empty()) throw InputError("no recordings to calibrate on");
+  const bool replayed = o.replay.use_recorded_upstream && recordings.front().has(columns::upstream_level);
+  const std::vector<std::string> specs =
+      o.parameters.empty() ? default_parameters(scenario, recordings, replayed) : o.parameters;
+  std::vector<Parameter> parameters = select_parameters(scenario, specs);
+
+  const auto started = std::chrono::steady_clock::now();
+  Calibration c;
+  c.calibrated = scenario;
+  ReplayOptions replay = o.replay;
+  // The actuator speed shows in the gate position: compare it when that is fitted.
+  const bool speed = std::any_of(parameters.begin(), parameters.end(), [](const Parameter& p) { return p.name == "actuator_speed_mm_s"; });
+  if (speed && std::find(replay.channels.begin(), replay.channels.end(), columns::gate_position) == replay.channels.end()) {
+    replay.channels.push_back(columns::gate_position);
+  }
+  std::vector<std::string> warnings;
+  ReplayProblem fit(scenario, parameters, recordings, replay, o.threads);
+  c.samples = fit.residual_count();
+  if (o.progress) o.progress({0.0, "nominal replay of " + std::to_string(recordings.size()) + " recording(s)"});
+  try {
+    const std::vector<double> z0 = fit.start();
+    const std::vector<Channels> nominal = fit.predict(z0);
+    c.cost_before = cost_per_sample(fit.residuals(nominal));
+    std::vector<Run> starts{Run{z0, c.cost_before, 0, ""}};
+    if (o.starts > 1 && o.screened_points > 0) {
+      if (o.progress) o.progress({0.05, "screening " + std::to_string(o.screened_points) + " points over the bounds"});
+      std::vector<Run> screened = screened_starts(fit, o.screened_points);
+      for (std::size_t k = 0; k < screened.size() && static_cast<int>(starts.size()) < o.starts; ++k) starts.push_back(screened[k]);
+    }
+    Run best;
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+      Run r = levenberg_marquardt(fit, starts[k].z, o, static_cast<int>(k), static_cast<int>(starts.size()));
+      c.iterations += r.iterations;
+      if (r.cost < best.cost) best = std::move(r);
+    }
+    c.starts = static_cast<int>(starts.size());
+    if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");
+    if (o.progress) o.progress({0.9, "statistics at the optimum"});
+    const std::vector<Channels> optimum = fit.predict(best.z);
+    const std::vector<double> r = fit.residuals(optimum);
+    c.cost_after = cost_per_sample(r);
+    c.solver_report = best.report;
+    const std::vector<double> J = fit.jacobian(best.z, r);
+    const ParameterStatistics stats = parameter_statistics(parameters, best.z, J, r, fit.residual_series(optimum));
+    c.inflation = stats.inflation;
+    c.correlation = stats.correlation;
+    for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
+    std::vector<double> shift(parameters.size(), 0.0);
+    if (o.grid_check) {
+      if (o.progress) o.progress({0.92, "grid check: twice the cells"});
+      c.grid = grid_check(fit, best.z, optimum, c.cost_after, J, r, shift);
+    }
+    for (std::size_t j = 0; j < parameters.size(); ++j) {
+      const Parameter& p = parameters[j];
+      const double value = p.from_search(best.z[j]);
+      // The grid's shift in parameter units (delta method for log parameters).
+      const double grid = p.transform == Transform::log ? value * std::abs(shift[j]) : std::abs(shift[j]);
+      ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), value,
+                          std::sqrt(stats.std[j] * stats.std[j] + grid * grid), stats.std[j], grid,
+                          p.low, p.high, false, stats.sensitivity[j]};
+      const double span = p.to_search(p.high) - p.to_search(p.low);
+      e.at_bound = best.z[j] <= p.to_search(p.low) + 1e-6 * span || best.z[j] >= p.to_search(p.high) - 1e-6 * span;
+      c.parameters.push_back(e);
+    }
+    c.calibrated = fit.scenario_at(best.z);
+    add_fits(fit, nominal, optimum, false, c);
+    if (!validation.empty()) {
+      if (o.progress) o.progress({0.93, "validation recordings"});
+      ReplayProblem check(scenario, parameters, validation, replay, o.threads, &fit.weights());
+      add_fits(check, check.predict(check.start()), check.predict(best.z), true, c);
+      c.simulations += check.simulations();
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    c.ok = false;
+    c.message = e.what();
+  }
+  c.simulations += fit.simulations();
+  c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  if (o.progress) o.progress({1.0, "done"});
+  return c;
+}
+
+}  // namespace canalsim::calibration

@@ -1,0 +1,119 @@
+// Calibration: the scenario parameters (calibration/parameters.hpp) that make the simulator
+// reproduce recordings it did not make.
+//
+//   1. Every recording is replayed (calibration/replay.hpp): its command drives the controlled
+//      gate, its recorded upstream level feeds the head gate where it has one, and it starts from
+//      the steady state at its own first samples.
+//   2. Weighted nonlinear least squares: r = sqrt(w_c) (recorded − model) over every recording,
+//      channel and sample, w_c = 1 / s_c² with s_c the channel's within-recording spread (as the
+//      diagnosis weighs channels). Level predictions are the model's levels through the sensors'
+//      offsets and delay, unrounded: the mean-square-best prediction of a quantised reading whose
+//      input wanders over more than a step.
+//   3. Ceres Solver's bounded Levenberg–Marquardt in the search coordinates (log for roughness and
+//      coefficients), Jacobians by forward differences whose perturbed simulations run in
+//      parallel (core/parallel.hpp); sensor-only parameters re-observe one simulation instead.
+//      Several starts — the scenario's values and the best of points spread over the bounds —
+//      the best kept.
+//   4. Statistics as PEST and parmest give them: covariance s² (JᵀJ)⁻¹ inflated by N / N_eff for
+//      residual autocorrelation (integrated autocorrelation time per series), standard deviations, correlations, composite
+//      scaled sensitivities, identifiability in words, fit per recording and channel before and
+//      after, on the fitted and the validation recordings, and the grid check (the residual on a
+//      grid with twice the cells at the optimum).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calibration/parameters.hpp"
+#include "calibration/replay.hpp"
+#include "core/progress.hpp"
+#include "core/recording.hpp"
+#include "scenarios/scenario.hpp"
+
+namespace canalsim::calibration {
+
+struct CalibrateOptions {
+  // Parameter specs, NAME or NAME:LOW:HIGH; empty = default_parameters().
+  std::vector<std::string> parameters;
+  // The replay: recorded upstream level on, every sample after the initial state compared, and
+  // each recording started from the steady state at its own first level.
+  ReplayOptions replay = default_replay();
+  int starts = 2;            // Levenberg–Marquardt runs (the scenario's values first); 1..10
+  int screened_points = 6;   // points spread over the bounds whose cost picks the other starts; >= 0
+  int max_iterations = 30;   // per run; 1..500
+  int threads = 2;           // simulations in parallel; 1..64
+  bool grid_check = true;    // re-simulate the optimum with twice the cells
+  ProgressCallback progress;
+  [[nodiscard]] std::string validate() const;
+  static ReplayOptions default_replay();
+};
+
+struct ParameterEstimate {
+  std::string name, unit, key;
+  double key_scale = 1.0;
+  double start = 0.0, value = 0.0;
+  // One standard deviation, +inf when the data do not determine it: the statistical one and the
+  // grid's (how far the estimate moves on twice the cells, 0 without the grid check) combined in
+  // quadrature.
+  double std = 0.0;
+  double statistical_std = 0.0, grid_shift = 0.0;
+  double low = 0.0, high = 0.0;
+  bool at_bound = false;
+  double sensitivity = 0.0;  // composite scaled sensitivity (weighted residual units)
+};
+
+// One recording and channel: fit before (the scenario as given) and after.
+struct ChannelFit {
+  std::string recording, channel;
+  bool validation = false;   // not used in the fit
+  double rms_before = 0.0, rms_after = 0.0;        // recording units (mm, l/s)
+  double nrmse_before = 0.0, nrmse_after = 0.0;    // paper eq. 19, %
+};
+
+// Parameters these recordings cannot separate, with what they do determine.
+struct Identifiability {
+  std::vector<std::string> parameters;
+  std::string reason;        // "|correlation| = 0.99", "relative std 80 %", "exact trade-off"
+  std::string determined;    // the combination that is determined, in words
+};
+
+struct GridCheck {
+  bool done = false;
+  int factor = 2;
+  double cost = 0.0, refined_cost = 0.0;   // weighted cost per sample at the optimum
+  double rms_change = 0.0;   // RMS change of the predicted levels [mm]
+  double residual_rms = 0.0; // RMS level residual at the optimum [mm]
+  std::string verdict;
+};
+
+// Recorded, nominal and calibrated series of one recording and channel, for plots.
+struct Series {
+  std::string recording, channel;
+  bool validation = false;
+  std::vector<double> t, recorded, nominal, calibrated;
+};
+
+struct Calibration {
+  bool ok = true;
+  std::string message;       // why it failed, when !ok
+  std::vector<ParameterEstimate> parameters;
+  std::vector<std::vector<double>> correlation;
+  std::vector<Identifiability> identifiability;
+  std::vector<ChannelFit> fits;
+  GridCheck grid;
+  std::vector<Series> series;
+  double cost_before = 0.0, cost_after = 0.0;   // weighted cost per sample (fitted recordings)
+  double inflation = 1.0;    // N / N_eff of the residuals at the optimum
+  std::size_t samples = 0;   // residuals in the fit
+  int simulations = 0, iterations = 0, starts = 0;
+  double seconds = 0.0;
+  std::string solver_report; // Ceres' one-line summary of the best run
+  scenarios::Scenario calibrated;
+};
+
+// Throws InputError for bad options, unusable recordings (check_recordings, one line naming each)
+// or parameters (select_parameters); numerical failure of the nominal replay is ok = false.
+Calibration calibrate(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
+                      const std::vector<Recording>& validation, const CalibrateOptions& options = {});
+
+}  // namespace canalsim::calibration

@@ -1,0 +1,158 @@
+#include "calibration/problem.hpp"
+
+#include <cmath>
+
+#include "core/parallel.hpp"
+
+namespace canalsim::calibration {
+
+using scenarios::Scenario;
+
+ReplayProblem::ReplayProblem(const Scenario& base, std::vector<Parameter> parameters,
+                             const std::vector<Recording>& recordings, const ReplayOptions& options, int threads,
+                             const ChannelWeights* weights)
+    : base_(base), parameters_(std::move(parameters)), options_(options), threads_(threads) {
+  for (const Recording& rec : recordings) {
+    Replay r = prepare_replay(rec, base, options_);
+    // A replayed upstream level is an input, not a comparison.
+    if (options_.use_recorded_upstream && rec.has(columns::upstream_level)) r.data.erase(columns::upstream_level);
+    replays_.push_back(std::move(r));
+  }
+  weights_ = weights ? *weights : channel_weights(replays_, options_.channels);
+  const bool upstream_replayed = options_.use_recorded_upstream &&
+                                 std::any_of(recordings.begin(), recordings.end(),
+                                             [](const Recording& r) { return r.has(columns::upstream_level); });
+  for (const auto& p : parameters_) {
+    // Offsets of the upstream sensor move the replayed upstream level, so they are hydraulic then.
+    const bool moves_input = upstream_replayed && (p.name == "offset_mm" || p.name == "offset_y_up_mm");
+    hydraulic_.push_back(!p.sensor_only || moves_input);
+  }
+  for (const auto& r : replays_) {
+    first_row_.push_back(rows_);
+    for (const auto& [c, y] : r.data) {
+      if (weights_.weight.count(c)) rows_ += r.n_fit;
+    }
+  }
+}
+
+std::vector<double> ReplayProblem::start() const {
+  std::vector<double> z;
+  for (const auto& p : parameters_) z.push_back(p.to_search(p.get(base_)));
+  return z;
+}
+
+Scenario ReplayProblem::scenario_at(const std::vector<double>& z) const {
+  Scenario s = base_;
+  for (std::size_t j = 0; j < parameters_.size(); ++j) parameters_[j].set(s, parameters_[j].from_search(z[j]));
+  return s;
+}
+
+Channels ReplayProblem::simulate(const Scenario& s, std::size_t recording) {
+  ++simulations_;
+  return replay_true(s, replays_[recording], options_);
+}
+
+Channels ReplayProblem::observed(const Channels& truth, const Scenario& s) const {
+  SensorModel m = sensor_model_of(s.sensors);
+  m.resolution_mm = 0.0;  // unrounded: the mean-square-best prediction of a quantised reading
+  return observe(truth, m, s.sensors.period_s);
+}
+
+bool ReplayProblem::same_hydraulics(const std::vector<double>& a, const std::vector<double>& b) const {
+  if (a.size() != b.size()) return false;
+  for (std::size_t j = 0; j < a.size(); ++j) {
+    if (hydraulic_[j] && a[j] != b[j]) return false;
+  }
+  return true;
+}
+
+std::vector<Channels> ReplayProblem::truth_at(const std::vector<double>& z) {
+  {
+    const std::lock_guard lock(cache_mutex_);
+    if (same_hydraulics(z, cached_z_)) return cached_truth_;
+  }
+  const Scenario s = scenario_at(z);
+  std::vector<Channels> truth(replays_.size());
+  parallel_for(replays_.size(), threads_, [&](std::size_t i) { truth[i] = simulate(s, i); });
+  const std::lock_guard lock(cache_mutex_);
+  cached_z_ = z;
+  cached_truth_ = truth;
+  return truth;
+}
+
+std::vector<Channels> ReplayProblem::predict(const std::vector<double>& z) {
+  const std::vector<Channels> truth = truth_at(z);
+  const Scenario s = scenario_at(z);
+  std::vector<Channels> out;
+  for (const auto& t : truth) out.push_back(observed(t, s));
+  return out;
+}
+
+std::vector<Channels> ReplayProblem::predict(const Scenario& s) {
+  std::vector<Channels> out(replays_.size());
+  parallel_for(replays_.size(), threads_, [&](std::size_t i) { out[i] = observed(simulate(s, i), s); });
+  return out;
+}
+
+void ReplayProblem::residuals_of(std::size_t i, const Channels& prediction, double* out) const {
+  const Replay& r = replays_[i];
+  std::size_t row = 0;
+  for (const auto& [c, y] : r.data) {
+    const auto w = weights_.weight.find(c);
+    if (w == weights_.weight.end()) continue;
+    const double sw = std::sqrt(w->second);
+    const auto m = prediction.find(c);
+    for (std::size_t k = 0; k < r.n_fit; ++k) out[row++] = m == prediction.end() ? 0.0 : sw * (y[k] - m->second[k]);
+  }
+}
+
+std::vector<double> ReplayProblem::residuals(const std::vector<Channels>& prediction) const {
+  std::vector<double> r(rows_);
+  for (std::size_t i = 0; i < replays_.size(); ++i) residuals_of(i, prediction[i], r.data() + first_row_[i]);
+  return r;
+}
+
+std::vector<std::vector<double>> ReplayProblem::residual_series(const std::vector<Channels>& prediction) const {
+  std::vector<std::vector<double>> out;
+  for (std::size_t i = 0; i < replays_.size(); ++i) {
+    for (const auto& [c, y] : replays_[i].data) {
+      const auto m = prediction[i].find(c);
+      if (m == prediction[i].end() || !weights_.weight.count(c)) continue;
+      std::vector<double> e(replays_[i].n_fit);
+      for (std::size_t k = 0; k < e.size(); ++k) e[k] = y[k] - m->second[k];
+      out.push_back(std::move(e));
+    }
+  }
+  return out;
+}
+
+std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const std::vector<double>& r0) {
+  const std::size_t p = parameters_.size(), n = replays_.size();
+  std::vector<double> J(rows_ * p, 0.0);
+  std::vector<double> steps(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    const Parameter& q = parameters_[j];
+    double h = q.step;
+    // Step inwards at the upper bound.
+    if (z[j] + h > q.to_search(q.high)) h = -h;
+    steps[j] = h;
+  }
+  const std::vector<Channels> base_truth = truth_at(z);
+  // Every (parameter, recording) pair is one task: a simulation for hydraulic parameters, a
+  // re-observation of the base simulation for sensor-only ones.
+  parallel_for(p * n, threads_, [&](std::size_t task) {
+    const std::size_t j = task / n, i = task % n;
+    std::vector<double> zj = z;
+    zj[j] += steps[j];
+    const Scenario s = scenario_at(zj);
+    const Channels prediction = observed(hydraulic_[j] ? simulate(s, i) : base_truth[i], s);
+    const std::size_t first = first_row_[i];
+    const std::size_t last = i + 1 < n ? first_row_[i + 1] : rows_;
+    std::vector<double> r(last - first);
+    residuals_of(i, prediction, r.data());
+    for (std::size_t k = 0; k < r.size(); ++k) J[(first + k) * p + j] = (r[k] - r0[first + k]) / steps[j];
+  });
+  return J;
+}
+
+}  // namespace canalsim::calibration

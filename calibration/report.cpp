@@ -1,0 +1,125 @@
+#include "calibration/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/format.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+std::string pad(std::string s, std::size_t width) {
+  if (s.size() < width) s += std::string(width - s.size(), ' ');
+  return s;
+}
+
+std::string lpad(std::string s, std::size_t width) {
+  if (s.size() < width) s = std::string(width - s.size(), ' ') + s;
+  return s;
+}
+
+std::string value_text(double v) { return std::isfinite(v) ? format_g(v, 5) : "inf"; }
+
+std::string std_text(const ParameterEstimate& p) {
+  if (!std::isfinite(p.std)) return "not determined";
+  return format_g(p.std, 2);
+}
+
+}  // namespace
+
+std::string text_summary(const Calibration& c) {
+  std::ostringstream out;
+  if (!c.ok) {
+    out << "calibration failed: " << c.message << "\n";
+    return out.str();
+  }
+  std::size_t w = 9;
+  for (const auto& p : c.parameters) w = std::max(w, p.name.size() + 2);
+  out << pad("parameter", w) << lpad("start", 12) << lpad("estimate", 12) << "  " << pad("± std", 16)
+      << pad("bounds", 22) << "unit\n";
+  for (const auto& p : c.parameters) {
+    out << pad(p.name, w) << lpad(value_text(p.start), 12) << lpad(value_text(p.value), 12) << "  "
+        << pad(std::string("± ").append(std_text(p)), 16)
+        << pad(std::string("[").append(format_g(p.low, 4)).append(", ").append(format_g(p.high, 4)).append("]"), 22) << p.unit
+        << (p.at_bound ? "  (at a bound)" : "") << "\n";
+  }
+  if (!c.identifiability.empty()) {
+    out << "\nnot identifiable from these recordings:\n";
+    for (const auto& u : c.identifiability) {
+      std::string names;
+      for (const auto& n : u.parameters) names += (names.empty() ? "" : ", ") + n;
+      out << "  " << names << ": " << u.reason;
+      if (!u.determined.empty()) out << "; determined: " << u.determined;
+      out << "\n";
+    }
+  }
+  std::size_t rw = 10;
+  for (const auto& f : c.fits) rw = std::max(rw, std::min<std::size_t>(f.recording.size(), 30) + 3);
+  out << "\n" << pad("recording", rw) << pad("channel", 10) << lpad("RMS before", 12) << lpad("after", 10)
+      << lpad("Nrmse before", 14) << lpad("after", 9) << "\n";
+  for (const auto& f : c.fits) {
+    std::string name = f.recording;
+    if (name.size() > 30) name = "..." + name.substr(name.size() - 27);
+    out << pad(name + (f.validation ? " *" : ""), rw) << pad(f.channel, 10) << lpad(format_fixed(f.rms_before, 3), 12)
+        << lpad(format_fixed(f.rms_after, 3), 10) << lpad(format_fixed(f.nrmse_before, 1) + " %", 14)
+        << lpad(format_fixed(f.nrmse_after, 1) + " %", 9) << "\n";
+  }
+  if (std::any_of(c.fits.begin(), c.fits.end(), [](const ChannelFit& f) { return f.validation; })) {
+    out << "(* validation recording, not used in the fit; RMS in mm or l/s)\n";
+  }
+  out << "\nweighted cost per sample " << format_g(c.cost_before, 4) << " -> " << format_g(c.cost_after, 4)
+      << "; residual autocorrelation inflates the variances " << format_fixed(c.inflation, 1) << "x\n";
+  if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
+  out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
+      << format_fixed(c.seconds, 1) << " s\n";
+  return out.str();
+}
+
+nlohmann::json to_json(const Calibration& c) {
+  using nlohmann::json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json j;
+  j["ok"] = c.ok;
+  if (!c.ok) j["message"] = c.message;
+  j["parameters"] = json::array();
+  for (const auto& p : c.parameters) {
+    j["parameters"].push_back({{"name", p.name}, {"unit", p.unit}, {"key", p.key}, {"start", p.start},
+                               {"value", p.value}, {"std", number(p.std)}, {"low", p.low}, {"high", p.high},
+                               {"at_bound", p.at_bound}, {"sensitivity", p.sensitivity}});
+  }
+  json corr = json::array();
+  for (const auto& row : c.correlation) {
+    json r = json::array();
+    for (double v : row) r.push_back(number(v));
+    corr.push_back(r);
+  }
+  j["correlation"] = corr;
+  j["identifiability"] = json::array();
+  for (const auto& u : c.identifiability) {
+    j["identifiability"].push_back({{"parameters", u.parameters}, {"reason", u.reason}, {"determined", u.determined}});
+  }
+  j["fits"] = json::array();
+  for (const auto& f : c.fits) {
+    j["fits"].push_back({{"recording", f.recording}, {"channel", f.channel}, {"validation", f.validation},
+                         {"rms_before", f.rms_before}, {"rms_after", f.rms_after}, {"nrmse_before", f.nrmse_before},
+                         {"nrmse_after", f.nrmse_after}});
+  }
+  if (c.grid.done) {
+    j["grid_check"] = {{"factor", c.grid.factor}, {"cost", c.grid.cost}, {"refined_cost", c.grid.refined_cost},
+                       {"rms_change_mm", c.grid.rms_change}, {"residual_rms_mm", c.grid.residual_rms},
+                       {"verdict", c.grid.verdict}};
+  }
+  j["cost_before"] = c.cost_before;
+  j["cost_after"] = c.cost_after;
+  j["autocorrelation_inflation"] = c.inflation;
+  j["samples"] = c.samples;
+  j["simulations"] = c.simulations;
+  j["starts"] = c.starts;
+  j["iterations"] = c.iterations;
+  j["seconds"] = c.seconds;
+  j["solver"] = c.solver_report;
+  return j;
+}
+
+}  // namespace canalsim::calibration

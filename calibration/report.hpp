@@ -1,0 +1,18 @@
+// A calibration for people and programs: the terminal table, the JSON document and the
+// self-contained HTML report (inline SVG, opens offline).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "calibration/calibrate.hpp"
+
+namespace canalsim::calibration {
+
+// Parameter, start, estimate ± std, bounds; identifiability; RMS/Nrmse per recording and
+// channel before and after; the grid check; simulations and time.
+std::string text_summary(const Calibration& c);
+nlohmann::json to_json(const Calibration& c);
+std::string html_report(const Calibration& c, const std::string& title);
+
+}  // namespace canalsim::calibration

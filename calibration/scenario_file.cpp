@@ -1,0 +1,83 @@
+#include "calibration/scenario_file.hpp"
+
+#include <map>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/format.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const auto b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+// The table a header line opens ("[a.b]" -> "a.b", the k-th "[[pools]]" -> "pools[k]"), or "".
+std::string header_of(const std::string& line, std::map<std::string, int>& array_counts) {
+  const std::string t = trim(line.substr(0, line.find('#')));
+  if (t.size() > 4 && t.rfind("[[", 0) == 0 && t.compare(t.size() - 2, 2, "]]") == 0) {
+    const std::string name = trim(t.substr(2, t.size() - 4));
+    return name + "[" + std::to_string(++array_counts[name]) + "]";
+  }
+  if (t.size() > 2 && t.front() == '[' && t.back() == ']') return trim(t.substr(1, t.size() - 2));
+  return "";
+}
+
+// The key a "key = value" line sets, or "".
+std::string key_of(const std::string& line) {
+  const std::string t = trim(line);
+  if (t.empty() || t[0] == '#' || t[0] == '[') return "";
+  const auto eq = t.find('=');
+  return eq == std::string::npos ? "" : trim(t.substr(0, eq));
+}
+
+}  // namespace
+
+std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdit>& edits) {
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  for (const KeyEdit& e : edits) {
+    const auto dot = e.key.rfind('.');
+    const std::string table = dot == std::string::npos ? "" : e.key.substr(0, dot);
+    const std::string key = e.key.substr(dot == std::string::npos ? 0 : dot + 1);
+    const std::string written = key + " = " + format_g(e.value, 10) + (e.comment.empty() ? "" : "  # " + e.comment);
+    std::map<std::string, int> counts;
+    std::string current;
+    long header = table.empty() ? -1 : -2;  // line index of the table's header; -1 = the root table
+    bool done = false;
+    for (std::size_t i = 0; i < lines.size() && !done; ++i) {
+      const std::string h = header_of(lines[i], counts);
+      if (!h.empty()) {
+        current = h;
+        if (current == table) header = static_cast<long>(i);
+        continue;
+      }
+      if (current == table && key_of(lines[i]) == key) {
+        lines[i] = written;
+        done = true;
+      }
+    }
+    if (done) continue;
+    if (header >= -1) {
+      lines.insert(lines.begin() + (header + 1), written);
+    } else if (table.find('[') != std::string::npos) {
+      throw InputError("calibrated scenario: the file has no table " + table + " for " + e.key);
+    } else {
+      lines.push_back("");
+      lines.push_back("[" + table + "]");
+      lines.push_back(written);
+    }
+  }
+  std::string out;
+  for (const auto& line : lines) out += line + "\n";
+  return out;
+}
+
+}  // namespace canalsim::calibration

@@ -1,0 +1,25 @@
+// Writing a calibrated scenario: the user's scenario file (or the built-in text) with the
+// calibrated keys replaced in place, each with its standard deviation in a comment, so the file
+// keeps its layout and comments and `simulate`, `diagnose` and `calibrate` read it as any other.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace canalsim::calibration {
+
+struct KeyEdit {
+  // A scenario key as the parameter catalog names it: "table.key", "table.sub.key" or
+  // "array[i].key" (i 1-based, e.g. "pools[1].manning_n").
+  std::string key;
+  double value = 0.0;
+  std::string comment;   // written after the value as "# comment"
+};
+
+// The TOML text with every edit applied: the key's line replaced where the table holds it,
+// inserted after the table's header where it does not, the table appended where the file has
+// none. Throws InputError naming the key when it cannot be placed (an array element the file
+// lacks). Values are written with 10 significant digits.
+std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdit>& edits);
+
+}  // namespace canalsim::calibration

@@ -1,0 +1,145 @@
+// `canalsim calibrate --scenario S REC... -o OUT.toml [--params P,...] [--validate REC...]
+// [--json F] [--report F.html] [--threads N]`: fits scenario parameters to recordings
+// (calibration/calibrate.hpp; docs/calibration.md), prints the table and writes the calibrated
+// scenario — the input file (or built-in text) with the calibrated keys replaced, each with its
+// standard deviation in a comment. Outputs are checked before the work and written atomically
+// only when the calibration succeeded.
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "calibration/calibrate.hpp"
+#include "calibration/report.hpp"
+#include "calibration/scenario_file.hpp"
+#include "cli/checks.hpp"
+#include "cli/commands.hpp"
+#include "core/files.hpp"
+#include "core/format.hpp"
+#include "core/progress.hpp"
+#include "core/recording.hpp"
+#include "scenarios/builtin.hpp"
+#include "scenarios/scenario_toml.hpp"
+
+namespace canalsim::cli {
+namespace {
+
+struct CalibrateArguments {
+  std::string scenario;
+  std::vector<std::string> recordings, validation, params, channels;
+  std::string out, json, report;
+  int threads = 2;
+  int starts = 2;
+};
+
+// The scenario's TOML text: the built-in's, or the file's.
+std::string scenario_text(const std::string& name_or_path) {
+  for (const auto& b : scenarios::builtin_scenarios()) {
+    if (b.name == name_or_path) return b.toml;  // as load_scenario_or_builtin: built-in names first
+  }
+  return read_text_file(name_or_path, "scenario file");
+}
+
+std::vector<Recording> read_all(const std::vector<std::string>& files) {
+  std::vector<Recording> out;
+  for (const auto& f : files) out.push_back(read_recording(f));
+  return out;
+}
+
+// The calibrated scenario file: the input text with every parameter's key replaced. Parsed back
+// and compared with the calibration, so a file that would not read back is never written.
+std::string calibrated_toml(const std::string& text, const calibration::Calibration& c, const CalibrateArguments& args) {
+  std::vector<calibration::KeyEdit> edits;
+  for (const auto& p : c.parameters) {
+    const std::string spread = std::isfinite(p.std) ? "± " + format_g(p.std, 2) : "std not determined";
+    edits.push_back({p.key, p.value * p.key_scale,
+                     "calibrated: " + p.name + " = " + format_g(p.value, 6) + " " + spread + " " + p.unit + " (was " +
+                         format_g(p.start, 6) + ")"});
+  }
+  std::string recordings;
+  for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
+  std::string out = "# Calibrated by canalsim calibrate from " + args.scenario + " on" + recordings + "\n" +
+                    calibration::edit_scenario_toml(text, edits);
+  const scenarios::Scenario back = scenarios::parse_scenario(out, args.out);
+  for (std::size_t j = 0; j < c.parameters.size(); ++j) {
+    const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +
+                                                               ":" + format_g(c.parameters[j].high, 17)});
+    const double read = catalog.front().get(back);
+    if (std::abs(read - c.parameters[j].value) > 1e-8 * std::max(1.0, std::abs(read))) {
+      throw std::runtime_error("calibrated scenario: " + c.parameters[j].key + " reads back as " + format_g(read) +
+                               ", expected " + format_g(c.parameters[j].value));
+    }
+  }
+  return out;
+}
+
+int run(const CalibrateArguments& args) {
+  check_output_file("-o", args.out);
+  check_output_file("--json", args.json);
+  check_output_file("--report", args.report);
+  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  const std::string text = scenario_text(args.scenario);
+  const std::vector<Recording> recordings = read_all(args.recordings);
+  const std::vector<Recording> validation = read_all(args.validation);
+
+  calibration::CalibrateOptions options;
+  options.parameters = args.params;
+  if (!args.channels.empty()) options.replay.channels = args.channels;
+  options.threads = args.threads;
+  options.starts = args.starts;
+  ProgressLine progress("calibrating " + s.name);
+  options.progress = progress.callback();
+  std::vector<std::string> warnings;
+  options.replay.warning = [&warnings](const std::string& w) {
+    if (warnings.size() < 3) warnings.push_back(w);
+  };
+  const calibration::Calibration c = calibration::calibrate(s, recordings, validation, options);
+  progress.finish();
+  for (const auto& w : warnings) std::cerr << "canalsim: warning: " << w << '\n';
+  std::cout << calibration::text_summary(c);
+  if (!c.ok) {
+    std::cerr << "canalsim: error: calibration failed: " << c.message << '\n';
+    return 1;
+  }
+  const std::string toml = calibrated_toml(text, c, args);
+  write_file_atomically(args.out, toml);
+  std::cout << "wrote " << args.out << '\n';
+  if (!args.json.empty()) {
+    write_file_atomically(args.json, calibration::to_json(c).dump(2) + "\n");
+    std::cout << "wrote " << args.json << '\n';
+  }
+  if (!args.report.empty()) {
+    write_file_atomically(args.report, calibration::html_report(c, "canalsim calibration: " + s.name));
+    std::cout << "wrote " << args.report << '\n';
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_calibrate_command(CLI::App& app) {
+  auto args = std::make_shared<CalibrateArguments>();
+  auto* cmd = app.add_subcommand("calibrate", "Fit a scenario's uncertain parameters to recordings");
+  cmd->add_option("--scenario", args->scenario, "Built-in scenario name or TOML file")->required();
+  cmd->add_option("recordings", args->recordings, "Recording CSV files to fit")->required();
+  cmd->add_option("-o,--out", args->out, "Write the calibrated scenario (TOML)")->required();
+  cmd->add_option("--params", args->params,
+                  "Parameters to fit, NAME or NAME:LOW:HIGH, comma-separated (default: the scenario's unknowns; "
+                  "docs/calibration.md)")
+      ->delimiter(',');
+  cmd->add_option("--channels", args->channels,
+                  "Channels compared, comma-separated (default y_dwe_mm,y_dw_mm,y_up_mm,q_lps; those a recording "
+                  "lacks are skipped)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"y_dwe_mm", "y_dw_mm", "y_up_mm", "x_up_mm", "q_lps"}));
+  cmd->add_option("--validate", args->validation, "Recordings to check the calibration on, not fitted");
+  cmd->add_option("--json", args->json, "Write the calibration as JSON");
+  cmd->add_option("--report", args->report, "Write a self-contained HTML report");
+  cmd->add_option("--threads", args->threads, "Simulations in parallel (default 2)")->check(thread_count());
+  cmd->add_option("--starts", args->starts, "Levenberg-Marquardt starts (default 2)")->check(integer_in(1, 10, "a number of starts"));
+  cmd->callback([args] {
+    const int code = run(*args);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace canalsim::cli

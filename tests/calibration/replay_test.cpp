@@ -1,0 +1,87 @@
+// Replays (calibration/replay.hpp): a recording replayed through the scenario that made it comes
+// back as recorded; the replay starts where the recording says it starts.
+#include "calibration/replay.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scenarios/builtin.hpp"
+#include "scenarios/simulate.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+using scenarios::Scenario;
+
+Scenario short_lab() {
+  Scenario s = scenarios::builtin_scenario("lab");
+  s.pools.front().cells = 40;
+  return s;
+}
+
+Recording record(const Scenario& s, const std::string& experiment, double seconds) {
+  scenarios::ExperimentSpec e = *s.find_experiment(experiment);
+  e.duration_s = seconds;
+  return scenarios::simulate(s, e);
+}
+
+double rms_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(sum / static_cast<double>(a.size()));
+}
+
+// `below_gate_mm`: the tolerance of y_dw, next to the gate, where a replayed upstream level
+// brings its own 0.05 mm quantisation into the hydraulics.
+void expect_replay_reproduces(const ReplayOptions& o, double below_gate_mm) {
+  const Scenario s = short_lab();
+  const Recording rec = record(s, "op2", 60.0);
+  const Replay r = prepare_replay(rec, s, o);
+  const Channels truth = replay_true(s, r, o);
+  const Channels seen = observe(truth, sensor_model_of(s.sensors), r.period_s);
+  // Levels within about one quantisation step (0.05 mm).
+  EXPECT_LT(rms_difference(r.data.at(columns::level_downstream_end), seen.at(columns::level_downstream_end)), 0.05);
+  EXPECT_LT(rms_difference(r.data.at(columns::level_below_gate), seen.at(columns::level_below_gate)), below_gate_mm);
+}
+
+TEST(Replay, ReproducesTheRecordingOfItsOwnScenario) { expect_replay_reproduces(ReplayOptions{}, 0.05); }
+
+TEST(Replay, ReproducesItWithTheRecordedUpstreamLevelAndTheClock) {
+  ReplayOptions o;
+  o.use_recorded_upstream = true;
+  o.clock_with_upstream = true;
+  o.start_at_recorded_level = true;
+  o.warmup_s = 0.0;
+  expect_replay_reproduces(o, 0.08);
+}
+
+TEST(Replay, StartsFromTheSteadyStateAtTheRecordingsOwnUpstreamLevel) {
+  // Recorded with the upstream pool held at 63 mm; the scenario says 60 mm.
+  Scenario recorded_on = short_lab();
+  recorded_on.upstream.level_m = 0.063;
+  recorded_on.sensors.resolution_mm = 0.0;
+  const Recording rec = record(recorded_on, "op3", 20.0);
+  Scenario model = short_lab();
+  model.sensors.resolution_mm = 0.0;
+  ReplayOptions o;
+  o.warmup_s = 0.0;
+  const Replay r = prepare_replay(rec, model, o);
+  // y_up reads the level at the gate, a few hundredths of a millimetre below the pool's.
+  EXPECT_NEAR(r.initial_upstream_mm, 63.0, 0.05);
+  const double first = r.data.at(columns::level_downstream_end).front();
+  const double nominal = replay_true(model, r, o).at(columns::level_downstream_end).front();
+  o.start_at_recorded_level = true;
+  const double own = replay_true(model, r, o).at(columns::level_downstream_end).front();
+  EXPECT_GT(std::abs(nominal - first), 0.5);   // 3 mm more head moves the steady level
+  EXPECT_NEAR(own, first, 0.05);               // the same steady state as the recording's
+}
+
+TEST(Replay, InitialLevelMetadataOverridesTheFirstSamples) {
+  Recording rec = record(short_lab(), "op3", 20.0);
+  rec.set_meta("initial_y_up_mm", "61.5");
+  EXPECT_DOUBLE_EQ(prepare_replay(rec, short_lab(), ReplayOptions{}).initial_upstream_mm, 61.5);
+}
+
+}  // namespace
+}  // namespace canalsim::calibration

@@ -1,0 +1,68 @@
+// `canalsim calibrate` refuses bad input with one error line and writes nothing (and leaves an
+// existing output alone).
+#include <gtest/gtest.h>
+
+#include "testing/cli_run.hpp"
+
+namespace {
+
+using namespace canalsim::cli_test;
+namespace fs = std::filesystem;
+
+// A short recording of the lab canal (its own simulator; only the refusals are tested here).
+fs::path lab_recording(const fs::path& scratch) {
+  const fs::path toml = scratch / "short.toml";
+  const RunResult show = run_canalsim("scenarios --show lab", scratch);
+  std::ofstream(toml) << show.out;
+  const RunResult sim = run_canalsim("simulate " + toml.string() + " -e op3 -o op3.csv", scratch);
+  EXPECT_EQ(sim.code, 0) << sim.err;
+  return scratch / "op3.csv";
+}
+
+TEST(Calibrate, BadInputIsOneLineAndWritesNothing) {
+  const fs::path scratch = scratch_dir("calibrate_bad");
+  const fs::path rec = lab_recording(scratch);
+  std::ofstream(scratch / "keep.toml") << "# an earlier result\n";
+  const std::size_t before = entry_count(scratch);
+  struct Case {
+    std::string args, says;
+  };
+  // A recording of another canal: its metadata names asce1.
+  std::string other = read_text(rec);
+  other.replace(other.find("# scenario: lab"), 15, "# scenario: asce1");
+  std::ofstream(scratch / "other.csv") << other;
+  const std::size_t with_other = before + 1;
+  for (const Case& c : {Case{"--params cd_fre", "unknown parameter 'cd_fre'"},
+                        Case{"--params cd_free:1.2:1.5", "outside its bounds [1.2, 1.5]"},
+                        Case{"--params manning_n:abc:1", "bound 'abc' is not a number"}}) {
+    const RunResult r = run_canalsim("calibrate --scenario lab " + rec.string() + " -o keep.toml " + c.args, scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    EXPECT_EQ(read_text(scratch / "keep.toml"), "# an earlier result\n");
+  }
+  const RunResult r = run_canalsim("calibrate --scenario lab other.csv -o keep.toml --json c.json", scratch);
+  EXPECT_TRUE(is_one_error_line(r)) << r.err;
+  EXPECT_NE(r.err.find("recorded on canal 'asce1'"), std::string::npos) << r.err;
+  EXPECT_EQ(entry_count(scratch), with_other);
+  EXPECT_EQ(read_text(scratch / "keep.toml"), "# an earlier result\n");
+  fs::remove_all(scratch);
+}
+
+TEST(Calibrate, WritesAScenarioThatSimulateReadsWithEachValueAndItsStd) {
+  const fs::path scratch = scratch_dir("calibrate_ok");
+  const fs::path rec = lab_recording(scratch);
+  const RunResult r = run_canalsim("calibrate --scenario lab " + rec.string() +
+                                       " -o cal.toml --params manning_n --starts 1 --json cal.json --report cal.html",
+                                   scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string toml = read_text(scratch / "cal.toml");
+  EXPECT_NE(toml.find("manning_n = "), std::string::npos);
+  EXPECT_NE(toml.find("# calibrated: manning_n = "), std::string::npos) << toml;
+  EXPECT_NE(toml.find("±"), std::string::npos);
+  EXPECT_NE(read_text(scratch / "cal.html").find("<svg"), std::string::npos);
+  const RunResult sim = run_canalsim("simulate cal.toml -e op3 -o again.csv", scratch);
+  EXPECT_EQ(sim.code, 0) << sim.err;
+  fs::remove_all(scratch);
+}
+
+}  // namespace
