@@ -38,6 +38,11 @@ double expected_reading(double y, double resolution, double spread) {
   if (!(resolution > 0.0)) return y;
   if (!(spread > 0.0)) return resolution * std::round(y / resolution);
   const double r = resolution;
+  // Above two steps of spread the reading is unbiased to machine precision: the bias is a Fourier
+  // series in y / r whose largest term is (r / π) exp(-2π² spread² / r²) < 1e-35 r (Widrow &
+  // Kollár 2008, Quantization Noise, ch. 4). Summing would also take 16 spread / r terms: 10⁹ for
+  // a level spike of 1e9 mm.
+  if (spread > 2.0 * r) return y;
   const auto first = static_cast<long>(std::floor((y - 8.0 * spread) / r)) - 1;
   const auto last = static_cast<long>(std::ceil((y + 8.0 * spread) / r)) + 1;
   auto cdf = [&](double v) { return 0.5 * std::erfc(-(v - y) / (spread * std::sqrt(2.0))); };

@@ -48,7 +48,7 @@ inline CLI::Validator number_in(double low, double high, const std::string& what
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         double v = 0.0;
-        if (!detail::parse_number(text, v) || v < low || v > high) return expected + ", got " + text;
+        if (!detail::parse_number(text, v) || v < low || v > high) return expected + ", got " + format_excerpt(text);
         return "";
       },
       "[" + format_g(low) + ", " + format_g(high) + "]");
@@ -59,7 +59,7 @@ inline CLI::Validator positive_number(const std::string& what) {
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         double v = 0.0;
-        if (!detail::parse_number(text, v) || !(v > 0.0)) return "expected " + what + " > 0, got " + text;
+        if (!detail::parse_number(text, v) || !(v > 0.0)) return "expected " + what + " > 0, got " + format_excerpt(text);
         return "";
       },
       "> 0");
@@ -78,7 +78,7 @@ inline CLI::Validator integer_in(long long low, long long high, const std::strin
           if (used == text.size() && v >= low && v <= high) return "";
         } catch (const std::exception&) {
         }
-        return expected + ", got " + text;
+        return expected + ", got " + format_excerpt(text);
       },
       std::to_string(low) + ".." + std::to_string(high));
 }

@@ -11,7 +11,11 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "core/progress.hpp"
+#include "core/format.hpp"
 #include "core/recording.hpp"
+#include "scenarios/run_cost.hpp"
+#include "solver/options.hpp"
 #include "solver/canal.hpp"
 
 namespace canalsim::cli {
@@ -40,7 +44,28 @@ double exact_depth(double x, double t, double h_right) {
   return xi < hm * um / (hm - h_right) ? hm : h_right;
 }
 
-void run_dambreak(int cells, double t_end, bool dry, const std::string& output) {
+// The run's cost before it starts (scenarios/run_cost.hpp's ceilings): the fastest wave of the
+// dam break is the Ritter front, 2 sqrt(g h0) (Toro 2001, ch. 4), so the solver takes about
+// t (2 sqrt(g h0) + sqrt(g h0)) / (cfl dx) steps of every cell.
+void check_dambreak_cost(int cells, double t_end, bool allow_long) {
+  const double dx = kLength / cells;
+  const double speed = 3.0 * std::sqrt(kGravity * kUpstreamDepth);
+  const double steps = t_end * speed / (solver::SolverOptions{}.cfl * dx);
+  const double updates = steps * cells, bytes = 1000.0 * cells;
+  if (allow_long) return;
+  if (bytes > scenarios::kMaxMemoryBytes) {
+    throw InputError("--cells " + std::to_string(cells) + ": needs about " + format_g(bytes / 1e9, 3) +
+                     " GB, expected at most " + format_g(scenarios::kMaxMemoryBytes / 1e9) + " GB (or pass --allow-long)");
+  }
+  if (updates > scenarios::kMaxCellUpdates) {
+    throw InputError("--cells " + std::to_string(cells) + " --time " + format_g(t_end) + ": about " + format_g(steps, 3) +
+                     " steps of " + std::to_string(cells) + " cells = " + format_g(updates, 3) +
+                     " cell updates, expected at most " + format_g(scenarios::kMaxCellUpdates) +
+                     " (fewer cells or a shorter time; or pass --allow-long)");
+  }
+}
+
+void run_dambreak(int cells, double t_end, bool dry, const std::string& output, bool allow_long) {
   if (cells < 2) throw InputError("--cells " + std::to_string(cells) + ": expected an integer >= 2");
   if (!(t_end > 0.0) || !std::isfinite(t_end)) {
     std::ostringstream text;
@@ -48,6 +73,7 @@ void run_dambreak(int cells, double t_end, bool dry, const std::string& output) 
     throw InputError(text.str());
   }
   check_output_file("-o", output);  // before the run, like every argument
+  check_dambreak_cost(cells, t_end, allow_long);
   const double h_right = dry ? 0.0 : 0.1;
 
   // Setup: one reach, water at rest behind the dam at x = 10 m, transmissive ends.
@@ -64,7 +90,13 @@ void run_dambreak(int cells, double t_end, bool dry, const std::string& output) 
   canal.set_boundary(0, solver::End::downstream, std::make_shared<solver::TransmissiveBoundary>());
 
   // Run.
-  if (auto st = canal.advance_to(t_end); !st) throw std::runtime_error("dam break: " + st.message());
+  // In 100 chunks, for the progress line of a long run.
+  ProgressLine progress("dam break, " + std::to_string(cells) + " cells");
+  for (int k = 1; k <= 100; ++k) {
+    if (auto st = canal.advance_to(k == 100 ? t_end : t_end * k / 100.0); !st) throw std::runtime_error("dam break: " + st.message());
+    progress.report({k / 100.0, ""});
+  }
+  progress.finish();
 
   // Output: the final state and the exact depth at each cell centre.
   const solver::Reach& r = canal.reach(0);
@@ -98,13 +130,15 @@ void add_dambreak_command(CLI::App& app) {
     double time = 1.5;
     bool dry = false;
     std::string output = "dambreak.csv";
+    bool allow_long = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("--cells", args->cells, "Number of cells on the 20 m channel")->capture_default_str();
   cmd->add_option("--time", args->time, "Simulated time [s]")->capture_default_str();
   cmd->add_flag("--dry", args->dry, "Dry bed downstream (Ritter) instead of 0.1 m (Stoker)");
   cmd->add_option("-o,--output", args->output, "CSV file to write")->capture_default_str();
-  cmd->callback([args] { run_dambreak(args->cells, args->time, args->dry, args->output); });
+  cmd->add_flag("--allow-long", args->allow_long, "Run past the cost ceilings (1e10 cell updates, 2 GB)");
+  cmd->callback([args] { run_dambreak(args->cells, args->time, args->dry, args->output, args->allow_long); });
 }
 
 }  // namespace canalsim::cli

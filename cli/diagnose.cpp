@@ -10,13 +10,16 @@
 #include <optional>
 
 #include "cli/checks.hpp"
+#include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
 #include "reduced_models/models.hpp"
 #include "diagnosis/report.hpp"
 #include "scenarios/builtin.hpp"
+#include "core/format.hpp"
 #include "core/recording.hpp"
+#include "scenarios/run_cost.hpp"
 
 namespace canalsim::cli {
 namespace {
@@ -35,6 +38,7 @@ struct DiagnoseArguments {
   int threads = 2;
   bool recorded_upstream = false;
   bool no_clock = false;
+  bool allow_long = false;
 };
 
 // Stops at the first unreadable recording: its error names the file and line, and the next
@@ -51,20 +55,21 @@ void check_outputs(const DiagnoseArguments& args) {
   check_output_file("--report", args.report);
 }
 
+// The JSON and the HTML report are written together, all or nothing: a report that cannot be
+// written leaves no JSON behind either (and replaces neither).
 int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title) {
+  const nlohmann::json json = diagnosis::to_json(d);
+  if (d.ok) require_finite_figures(json, "diagnosis");
   std::cout << diagnosis::text_summary(d);
   if (!d.ok) {
     std::cerr << "canalsim: error: diagnosis failed: " << d.message << '\n';
     return 1;
   }
-  if (!args.json.empty()) {
-    write_file_atomically(args.json, diagnosis::to_json(d).dump(2) + "\n");
-    std::cout << "wrote " << args.json << '\n';
-  }
-  if (!args.report.empty()) {
-    write_file_atomically(args.report, diagnosis::html_report(d, title));
-    std::cout << "wrote " << args.report << '\n';
-  }
+  std::vector<FileContents> outputs;
+  if (!args.json.empty()) outputs.emplace_back(args.json, json.dump(2) + "\n");
+  if (!args.report.empty()) outputs.emplace_back(args.report, diagnosis::html_report(d, title));
+  write_files_atomically(outputs);
+  for (const auto& [file, text] : outputs) std::cout << "wrote " << file.string() << '\n';
   return 0;
 }
 
@@ -84,6 +89,29 @@ int run_model(const DiagnoseArguments& args) {
   return write_outputs(d, args, "canalsim diagnosis: " + args.model);
 }
 
+// A diagnosis replays every recording through the scenario about 1 + 5 times per candidate
+// effect (the progress budget of diagnosis::diagnose): its cost is that many runs of the
+// recording's length (scenarios/run_cost.hpp), refused above the same ceiling as one run.
+void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
+                          const DiagnoseArguments& args) {
+  if (args.allow_long) return;
+  const double candidates = args.candidates.empty() ? 10.0 : static_cast<double>(args.candidates.size());
+  double updates = 0.0;
+  for (const Recording& rec : recordings) {
+    scenarios::ExperimentSpec replay;
+    replay.name = rec.source;
+    replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
+    updates += (1.0 + 5.0 * candidates) * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
+  }
+  if (updates > scenarios::kMaxCellUpdates) {
+    throw InputError("diagnose: replaying " + std::to_string(recordings.size()) + " recording(s) of " +
+                     format_g(recordings.front().size(), 3) + "+ samples about " + format_g(1.0 + 5.0 * candidates) +
+                     " times each through " + s.name + " is about " + format_g(updates, 3) +
+                     " cell updates, expected at most " + format_g(scenarios::kMaxCellUpdates) +
+                     " (shorter recordings, fewer --candidates; or pass --allow-long)");
+  }
+}
+
 int run(const DiagnoseArguments& args) {
   if (args.scenario.empty() == args.model.empty()) {
     throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
@@ -96,6 +124,8 @@ int run(const DiagnoseArguments& args) {
   if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
   }
+
+  check_diagnosis_cost(s, recordings, args);
 
   diagnosis::DiagnoseOptions options;
   options.candidates = args.candidates;
@@ -136,6 +166,8 @@ void add_diagnose_command(CLI::App& app) {
                 "Drive the head gate with the recorded y_up_mm instead of the scenario's upstream model");
   cmd->add_flag("--no-clock", args->no_clock,
                 "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
+  cmd->add_flag("--allow-long", args->allow_long,
+                "--scenario: run past the cost ceiling (1e10 cell updates over all replays; docs/scenarios.md)");
   cmd->callback([args] {
     const int code = run(*args);
     if (code != 0) throw CLI::RuntimeError(code);

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "cli/checks.hpp"
+#include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "cli/freq_check.hpp"
 #include "scenarios/builtin.hpp"
@@ -287,6 +288,16 @@ void run_fit(const FitArguments& args) {
       nominal = fit_nominal(kind, data, options);
     }
     progress.report({-1.0, "nominal model done"});
+  }
+
+  // Nothing is printed unless every figure is a number.
+  for (std::size_t j = 0; j < fits.size(); ++j) {
+    require_finite_figures(fit_json(fits[j], data, {j}), "fit of " + model_name(kind) + " to " + fits[j].sources.front());
+  }
+  if (nominal) {
+    std::vector<std::size_t> all(data.size());
+    for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
+    require_finite_figures(fit_json(*nominal, data, all), "nominal fit of " + model_name(kind));
   }
 
   // Table.

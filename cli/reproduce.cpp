@@ -125,23 +125,19 @@ void run_reproduce(const ReproduceArguments& args) {
   const std::string bode_html = study::bode_html(bode);
   progress.finish();
 
-  // Write: all or nothing.
+  // Write: all or nothing. A file that cannot be replaced restores the others' previous contents
+  // (core/files.hpp); a directory this run created is removed again.
   std::error_code ec;
   const bool created = !fs::exists(dir, ec);
   if (created && !fs::create_directory(dir, ec)) {
     throw InputError(dir.string() + ": cannot create --out directory: " + ec.message());
   }
-  const std::vector<std::pair<fs::path, const std::string*>> files = {
-      {dir / "tables.json", &json}, {dir / "tables.md", &md}, {dir / "report.html", &html},
-      {dir / "bode.json", &bode_json}, {dir / "bode.md", &bode_md}, {dir / "bode.html", &bode_html}};
-  std::vector<fs::path> written;
+  const std::vector<FileContents> files = {
+      {dir / "tables.json", json}, {dir / "tables.md", md}, {dir / "report.html", html},
+      {dir / "bode.json", bode_json}, {dir / "bode.md", bode_md}, {dir / "bode.html", bode_html}};
   try {
-    for (const auto& [file, text] : files) {
-      write_file_atomically(file, *text);
-      written.push_back(file);
-    }
+    write_files_atomically(files);
   } catch (...) {
-    for (const auto& f : written) fs::remove(f, ec);
     if (created) fs::remove(dir, ec);
     throw;
   }

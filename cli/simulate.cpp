@@ -10,7 +10,9 @@
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "scenarios/builtin.hpp"
+#include "core/format.hpp"
 #include "core/recording.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::cli {
@@ -21,6 +23,7 @@ struct SimulateArguments {
   std::vector<std::string> experiments;
   std::string output;
   std::string out_dir;  // empty: not given (the current directory, unless -o)
+  bool allow_long = false;
 };
 
 // The recording file name of an experiment under --out-dir (docs/recording-format.md): `*` reads
@@ -92,19 +95,27 @@ void run(const SimulateArguments& args) {
   const auto chosen = choose_experiments(s, args);
   check_outputs(chosen, args);
   const auto files = output_files(chosen, args);
+  // Every experiment runs first; the recordings are written together at the end, all or nothing,
+  // so that a failure in the third experiment leaves no first two files (and replaces nothing).
+  std::vector<FileContents> outputs;
+  std::vector<std::string> summaries;
   for (std::size_t i = 0; i < chosen.size(); ++i) {
     const auto* e = chosen[i];
     scenarios::SimulateOptions options;
+    options.allow_long_run = args.allow_long;
     ProgressLine progress("simulating " + s.name + "/" + e->name);
     options.progress = progress.callback();
     const Recording rec = scenarios::simulate(s, *e, options);
     progress.finish();
-    // Created only now, so that a run that fails in its first simulation leaves no directory.
-    if (i == 0 && !args.out_dir.empty()) create_directory_for("--out-dir", args.out_dir);
-    write_recording(files[i], rec);
-    std::cout << "wrote " << files[i].string() << " (" << rec.size() << " samples, " << rec.sample_period()
-              << " s)\n";
+    for (const auto& line : scenarios::run_report_lines(rec)) std::cerr << "canalsim: " << line << '\n';
+    outputs.emplace_back(files[i], format_recording(rec));
+    summaries.push_back("wrote " + files[i].string() + " (" + std::to_string(rec.size()) + " samples, " +
+                        format_g(rec.sample_period()) + " s)");
   }
+  // Created only now, so that a run that fails in a simulation leaves no directory.
+  if (!args.out_dir.empty()) create_directory_for("--out-dir", args.out_dir);
+  write_files_atomically(outputs);
+  for (const auto& line : summaries) std::cout << line << '\n';
 }
 
 }  // namespace
@@ -118,6 +129,8 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--out-dir", args->out_dir,
                   "Directory for the recordings, created if missing; one NAME.csv each, '*' in NAME written "
                   "as 's' (op1* -> op1s.csv) (default: .)");
+  cmd->add_flag("--allow-long", args->allow_long,
+                "Run past the cost ceilings (1e10 cell updates, 2 GB; docs/scenarios.md, \"Run cost\")");
   cmd->callback([args] { run(*args); });
 }
 

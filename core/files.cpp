@@ -1,6 +1,12 @@
 #include "core/files.hpp"
 
+#include <atomic>
+#include <csignal>
+#include <cstring>
 #include <fstream>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
 #include <sstream>
 #include <system_error>
 #include <unistd.h>
@@ -20,8 +26,20 @@ std::string read_text_file(const std::filesystem::path& file, const std::string&
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string() + ": cannot open the " + what + " for reading (permission denied?)");
+  // Read in chunks up to a ceiling: a device or pipe without end (/dev/zero given as a recording)
+  // must not fill the memory.
   std::ostringstream buffer;
-  buffer << in.rdbuf();
+  std::string chunk(1 << 16, '\0');
+  std::size_t total = 0;
+  while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+    total += static_cast<std::size_t>(in.gcount());
+    if (total > kMaxTextFileBytes) {
+      throw InputError(file.string() + ": the " + what + " is larger than " +
+                       std::to_string(kMaxTextFileBytes >> 20) + " MB: expected a text file");
+    }
+    buffer.write(chunk.data(), in.gcount());
+    if (in.eof()) break;
+  }
   // A file stream reports a read error as an early end of file: compare with the size the file
   // system gives, so that an I/O error does not pass for a short or empty file.
   const auto size = std::filesystem::is_regular_file(status) ? std::filesystem::file_size(file, ec) : 0;
@@ -31,28 +49,191 @@ std::string read_text_file(const std::filesystem::path& file, const std::string&
   return buffer.str();
 }
 
+// ---- interrupt guards -------------------------------------------------------------------------
+//
+// The registry is a fixed array of slots so that the signal handler touches nothing but
+// lock-free atomics, char arrays and the async-signal-safe calls unlink(2) and rename(2).
+
+namespace {
+
+constexpr int kSlots = 64;
+constexpr std::size_t kPathBytes = 4096;
+
+struct Slot {
+  std::atomic<int> state{0};  // kFree, kFilling, kLive
+  char path[kPathBytes] = {};
+  char restore_to[kPathBytes] = {};  // empty: remove `path`; else rename `path` over it
+};
+constexpr int kFree = 0, kFilling = 1, kLive = 2;
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free atomics");
+
+Slot g_slots[kSlots];
+struct sigaction g_previous_interrupt, g_previous_terminate;
+
+void undo(Slot& slot) {
+  if (slot.restore_to[0] != '\0') {
+    ::rename(slot.path, slot.restore_to);
+  } else {
+    ::unlink(slot.path);
+  }
+}
+
+extern "C" void remove_live_paths_and_reraise(int signal_number) {
+  for (Slot& slot : g_slots) {
+    if (slot.state.load() == kLive) undo(slot);
+  }
+  // The signal's previous disposition (the default: terminate) takes over; it is blocked while
+  // this handler runs, so the raised one is delivered as the handler returns.
+  ::sigaction(signal_number, signal_number == SIGINT ? &g_previous_interrupt : &g_previous_terminate, nullptr);
+  ::raise(signal_number);
+}
+
+void install_handler(int signal_number, struct sigaction* previous) {
+  ::sigaction(signal_number, nullptr, previous);
+  if (previous->sa_handler == SIG_IGN) return;  // an ignored signal stays ignored (nohup)
+  struct sigaction action {};
+  action.sa_handler = remove_live_paths_and_reraise;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  ::sigaction(signal_number, &action, nullptr);
+}
+
+void copy_path(char (&to)[kPathBytes], const std::filesystem::path& from) {
+  const std::string text = from.string();
+  if (text.size() >= kPathBytes) throw InputError(text.substr(0, 200) + "...: path too long");
+  std::memcpy(to, text.c_str(), text.size() + 1);
+}
+
+}  // namespace
+
+InterruptGuard::InterruptGuard(const std::filesystem::path& path, const std::filesystem::path& restore_to) {
+  static std::once_flag installed;
+  std::call_once(installed, [] {
+    install_handler(SIGINT, &g_previous_interrupt);
+    install_handler(SIGTERM, &g_previous_terminate);
+  });
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = kFree;
+    if (!g_slots[i].state.compare_exchange_strong(expected, kFilling)) continue;
+    try {
+      copy_path(g_slots[i].path, path);
+      copy_path(g_slots[i].restore_to, restore_to);
+    } catch (...) {
+      g_slots[i].state.store(kFree);
+      throw;
+    }
+    g_slots[i].state.store(kLive);
+    slot_ = i;
+    return;
+  }
+  throw std::logic_error("InterruptGuard: more than 64 files being written at once");
+}
+
+void InterruptGuard::release() {
+  if (slot_ >= 0) g_slots[slot_].state.store(kFree);
+  slot_ = -1;
+}
+
+void InterruptGuard::cleanup() {
+  if (slot_ < 0) return;
+  g_slots[slot_].state.store(kFilling);  // the handler leaves it alone while we act
+  undo(g_slots[slot_]);
+  release();
+}
+
+// ---- writing ----------------------------------------------------------------------------------
+
+namespace {
+
+std::filesystem::path beside(const std::filesystem::path& file, const char* kind) {
+  return file.string() + "." + kind + "." + std::to_string(static_cast<long>(::getpid()));
+}
+
+void write_contents(const std::filesystem::path& temporary, const std::filesystem::path& file,
+                    const std::string& contents) {
+  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+  if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
+  out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+  out.flush();
+  if (!out) throw InputError(file.string() + ": write failed (disk full?)");
+}
+
+// A second name for `file`'s current contents that survives the rename over `file`: a hard link
+// (the file never goes missing), or a copy where the file system has no hard links.
+void keep_backup(const std::filesystem::path& file, const std::filesystem::path& backup) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) throw InputError(file.string() + ": is a directory, expected a file");
+  std::filesystem::remove(backup, ec);
+  if (::link(file.c_str(), backup.c_str()) == 0) return;
+  if (!std::filesystem::copy_file(file, backup, ec)) {
+    std::error_code ignored;
+    std::filesystem::remove(backup, ignored);
+    throw InputError(file.string() + ": cannot keep the previous file while replacing it: " + ec.message());
+  }
+}
+
+}  // namespace
+
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
-  const std::filesystem::path temporary =
-      file.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
-    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw InputError(file.string() + ": write failed (disk full?)");
+  write_files_atomically({{file, contents}});
+}
+
+void write_files_atomically(const std::vector<FileContents>& files) {
+  namespace fs = std::filesystem;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (fs::absolute(files[i].first).lexically_normal() == fs::absolute(files[j].first).lexically_normal()) {
+        throw std::logic_error("write_files_atomically: " + files[i].first.string() + " given twice");
+      }
     }
   }
-  std::error_code ec;
-  std::filesystem::rename(temporary, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw InputError(file.string() + ": cannot replace the file: " + ec.message());
+  // 1. Every file complete under a temporary name; a failure removes them all (the guards'
+  //    cleanup), and nothing that was there has been touched.
+  std::vector<std::unique_ptr<InterruptGuard>> temporaries;
+  auto remove_temporaries = [&] {
+    for (auto& guard : temporaries) guard->cleanup();
+  };
+  try {
+    for (const auto& [file, contents] : files) {
+      const fs::path temporary = beside(file, "tmp");
+      temporaries.push_back(std::make_unique<InterruptGuard>(temporary));
+      write_contents(temporary, file, contents);
+    }
+  } catch (...) {
+    remove_temporaries();
+    throw;
   }
+  // 2. Renamed into place one by one. Each existing file keeps a backup whose guard renames it
+  //    back (a new file's guard removes it) if a later file fails or the process is interrupted.
+  std::vector<std::unique_ptr<InterruptGuard>> committed;
+  std::vector<fs::path> backups;
+  try {
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      const fs::path& file = files[i].first;
+      std::error_code ec;
+      if (fs::exists(fs::symlink_status(file, ec))) {
+        // Until the backup is complete an interruption removes it; from then on it is restored.
+        const fs::path backup = beside(file, "bak");
+        InterruptGuard half_made(backup);
+        keep_backup(file, backup);
+        committed.push_back(std::make_unique<InterruptGuard>(backup, file));
+        half_made.release();
+        backups.push_back(backup);
+      } else {
+        committed.push_back(std::make_unique<InterruptGuard>(file));
+      }
+      fs::rename(beside(file, "tmp"), file, ec);
+      if (ec) throw InputError(file.string() + ": cannot replace the file: " + ec.message());
+      temporaries[i]->release();
+    }
+  } catch (...) {
+    for (auto it = committed.rbegin(); it != committed.rend(); ++it) (*it)->cleanup();
+    remove_temporaries();
+    throw;
+  }
+  // 3. The whole set is in: forget the guards, drop the backups.
+  for (auto& guard : committed) guard->release();
+  for (const auto& backup : backups) ::unlink(backup.c_str());
 }
 
 }  // namespace canalsim

@@ -25,4 +25,12 @@ std::string format_estimate(double value, double std) {
   return format_fixed(value, decimals) + " ± " + format_fixed(std, decimals);
 }
 
+std::string format_excerpt(const std::string& text) {
+  constexpr std::size_t kShown = 60;
+  if (text.size() <= kShown) return text;
+  std::size_t cut = kShown;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;  // not inside a character
+  return text.substr(0, cut) + "... (" + std::to_string(text.size()) + " characters)";
+}
+
 }  // namespace canalsim

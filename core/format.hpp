@@ -17,4 +17,8 @@ std::string format_fixed(double value, int decimals);
 // A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)".
 std::string format_estimate(double value, double std);
 
+// A value echoed in a message: at most the first 60 characters (whole UTF-8 characters) and
+// then "... (N characters)", so that a 1 MB field does not make a 1 MB error line.
+std::string format_excerpt(const std::string& text);
+
 }  // namespace canalsim

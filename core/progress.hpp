@@ -3,9 +3,11 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <functional>
 #include <mutex>
 #include <string>
+#include <thread>
 
 namespace canalsim {
 
@@ -21,9 +23,11 @@ struct ProgressReport {
 using ProgressCallback = std::function<void(const ProgressReport&)>;
 
 // A progress line on stderr, "LABEL [  3.2 s]: 42% message": on a terminal rewritten in place, the
-// first report at once and then at most 10 times a second; on a pipe or file a line every 5 s once
-// the work has run 5 s, so logs stay readable and short commands print nothing. `force` shows a
-// report (a stage change) whatever the timing.
+// first report at once and then at most 10 times a second; on a pipe or file a line once the work
+// has run 1.5 s and then every 5 s, so logs stay readable and short commands print nothing. A
+// heartbeat thread repeats the last report when the work says nothing for a while (a long Newton
+// solve), so no run longer than 1.5 s is silent. `force` shows a report (a stage change) whatever
+// the timing.
 class ProgressLine {
  public:
   explicit ProgressLine(std::string label);
@@ -34,15 +38,22 @@ class ProgressLine {
   void report(const ProgressReport& report, bool force = false);
   // A callback that forwards to report(); valid while this object lives.
   ProgressCallback callback();
-  // Ends the in-place line on a terminal (called by the destructor).
+  // Stops the heartbeat and ends the in-place line on a terminal (called by the destructor).
   void finish();
 
  private:
+  void show(bool force);  // with mutex_ held
+  void beat();            // the heartbeat thread
+
   std::mutex mutex_;
+  std::condition_variable wake_;
   std::string label_;
   bool tty_;
   bool shown_ = false;
+  bool stopped_ = false;
+  ProgressReport last_report_{0.0, ""};
   std::chrono::steady_clock::time_point start_, last_;
+  std::thread heartbeat_;  // last: starts once everything above is ready
 };
 
 }  // namespace canalsim

@@ -42,7 +42,7 @@ double parse_cell(const std::string& text, const std::string& column, const std:
     if (text == "submerged") return static_cast<double>(RegimeCode::submerged);
     // Also accepted: the numeric codes 0 (free) and 1 (submerged).
     if (text != "0" && text != "1") {
-      fail(source, line, "column regime: expected free, submerged, 0 or 1, found '" + text + "'");
+      fail(source, line, "column regime: expected free, submerged, 0 or 1, found '" + format_excerpt(text) + "'");
     }
   }
   double value = 0.0;
@@ -50,10 +50,14 @@ double parse_cell(const std::string& text, const std::string& column, const std:
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(begin, end, value);
   if (ec != std::errc() || ptr != end || text.empty()) {
-    fail(source, line, "column " + column + ": expected a number, found '" + text + "'");
+    fail(source, line, "column " + format_excerpt(column) + ": expected a number, found '" + format_excerpt(text) + "'");
   }
   if (!std::isfinite(value)) {
     fail(source, line, "column " + column + ": value is " + text + ", expected a finite number");
+  }
+  if (std::abs(value) > kMaxRecordedMagnitude) {
+    fail(source, line, "column " + column + ": value " + format_g(value) + " is out of range: expected a magnitude of at most " +
+                           format_g(kMaxRecordedMagnitude));
   }
   return value;
 }
@@ -64,6 +68,10 @@ void check_time_axis(const Recording& rec, const std::vector<std::size_t>& row_l
   if (t.size() < 2) fail(rec.source, row_lines.empty() ? 1 : row_lines.back(),
                          "expected at least two samples, found " + std::to_string(t.size()));
   const double dt = t[1] - t[0];
+  if (dt > 0.0 && dt < kMinSamplePeriod) {
+    fail(rec.source, row_lines[1], "t_s steps by " + format_g(dt) + " s: expected a sampling period of at least " +
+                                       format_g(kMinSamplePeriod) + " s");
+  }
   for (std::size_t i = 1; i < t.size(); ++i) {
     const double step = t[i] - t[i - 1];
     if (!(step > 0.0)) {
@@ -138,6 +146,12 @@ double Recording::sample_period() const {
   return t[1] - t[0];
 }
 
+std::string Recording::where(std::size_t row) const {
+  const std::string name = source.empty() ? std::string("recording") : source;
+  if (row < row_lines.size()) return name + ":" + std::to_string(row_lines[row]);
+  return name + ", row " + std::to_string(row + 1);
+}
+
 Recording parse_recording(const std::string& text, const std::string& source,
                           const RecordingReadOptions& options) {
   Recording rec;
@@ -167,7 +181,7 @@ Recording parse_recording(const std::string& text, const std::string& source,
       }
       for (const auto& name : fields) {
         if (name.empty()) fail(source, line_number, "empty column name in the header");
-        if (rec.has(name)) fail(source, line_number, "column " + name + " appears twice");
+        if (rec.has(name)) fail(source, line_number, "column " + format_excerpt(name) + " appears twice");
         rec.names.push_back(name);
       }
       rec.columns.resize(rec.names.size());
@@ -194,6 +208,7 @@ Recording parse_recording(const std::string& text, const std::string& source,
                      ", no header line (expected column names, e.g. t_s,u_mm,y_dwe_mm)");
   }
   if (rec.has(columns::time)) check_time_axis(rec, row_lines, options.uniform_tolerance);
+  rec.row_lines = std::move(row_lines);
   return rec;
 }
 
@@ -201,9 +216,22 @@ Recording read_recording(const std::filesystem::path& file, const RecordingReadO
   return parse_recording(read_text_file(file, "recording"), file.string(), options);
 }
 
+// A metadata line ends at the first line break: any inside a value (a scenario name with a newline)
+// would start a line the reader takes for the header, so they are written as spaces.
+namespace {
+std::string one_metadata_line(std::string text) {
+  for (char& c : text) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return text;
+}
+}  // namespace
+
 std::string format_recording(const Recording& rec) {
   std::string out;
-  for (const auto& [key, value] : rec.metadata) out += "# " + key + ": " + value + "\n";
+  for (const auto& [key, value] : rec.metadata) {
+    out += "# " + one_metadata_line(key) + ": " + one_metadata_line(value) + "\n";
+  }
   for (std::size_t c = 0; c < rec.names.size(); ++c) {
     out += (c ? "," : "") + rec.names[c];
   }

@@ -26,6 +26,7 @@ struct Recording {
   std::vector<std::string> names;                             // column names, header order
   std::vector<std::vector<double>> columns;                   // columns[c][row]
   std::string source;                                         // file it came from, for messages
+  std::vector<std::size_t> row_lines;  // line of each row in `source` (empty when not read from text)
 
   std::size_t size() const { return columns.empty() ? 0 : columns.front().size(); }
   bool has(const std::string& name) const;
@@ -39,6 +40,8 @@ struct Recording {
   void set_meta(const std::string& key, const std::string& value);
   // Sampling period t[1] - t[0] in seconds (requires at least two rows).
   double sample_period() const;
+  // "SOURCE:LINE" of a row for messages ("SOURCE, row N" when the line is unknown).
+  std::string where(std::size_t row) const;
 };
 
 // Column names of the standard format.
@@ -67,9 +70,17 @@ inline RecordingReadOptions input_series_columns() {
   return options;
 }
 
+// The largest magnitude a recorded number may have (s, mm, L/s): 1e12 mm is a million km. Larger
+// values are corrupt data whose squares and sums overflow to inf and NaN further on.
+inline constexpr double kMaxRecordedMagnitude = 1.0e12;
+// The shortest sampling period read (1 µs): canal sensors sample in tenths of seconds, and the
+// models' delays and memories counted in samples would need 10¹² of them at a 1e-12 s step.
+inline constexpr double kMinSamplePeriod = 1.0e-6;
+
 // Reads and validates a recording. Throws InputError ("FILE:LINE: problem") on an unreadable
-// file, a missing header or required column, a non-numeric or NaN value, a row of the wrong
-// length, or time that is not increasing and uniformly sampled.
+// file, a missing header or required column, a non-numeric, non-finite or out-of-range (above
+// kMaxRecordedMagnitude) value, a row of the wrong length, or time that is not increasing and
+// uniformly sampled.
 Recording read_recording(const std::filesystem::path& file, const RecordingReadOptions& options = {});
 Recording parse_recording(const std::string& text, const std::string& source,
                           const RecordingReadOptions& options = {});

@@ -29,6 +29,12 @@ constexpr double submergence_exponent = 0.7;
 // then large and finite with the right sign (the discharge itself is not regularised).
 constexpr double singular_floor = 1e-9;
 
+// Openings below a picometre pass no flow. The law's 1/a terms (the log-derivative in a, the
+// border's dy_lc/da = -0.72 y_lc / a) overflow to inf, and then NaN, for openings that round
+// towards zero (a command of 1e-320 mm); such a gate is closed for every physical purpose: it
+// would pass ~1e-12 m²/s.
+constexpr double smallest_opening = 1e-12;  // m
+
 std::string range_problem(const char* field, const char* range, double value) {
   std::ostringstream out;
   out << field << ": expected a value in " << range << ", got " << value;
@@ -181,7 +187,7 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const double geometric = std::max(a, 0.0) + options_.leakage_opening;
   const double dgeometric_da = a > 0.0 ? 1.0 : 0.0;
   regime = GateRegime::closed;
-  if (geometric <= 0.0 || y1 <= 0.0) return out;
+  if (geometric < smallest_opening || y1 <= 0.0) return out;
   const bool out_of_water = geometric >= y1;
 
   // Opening seen by the law: frozen at cap_ratio y1 near and above the surface (header comment).

@@ -98,6 +98,12 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
                      " mm): the input has no excitation, so no model can be identified "
                      "(expected e.g. a PRBS around the operating point)");
   }
+  const auto [ymin, ymax] = std::minmax_element(d.y_dwe_mm.begin(), d.y_dwe_mm.end());
+  if (*ymax == *ymin) {
+    throw InputError(source + ": y_dwe_mm is constant (" + format_g(*ymin) +
+                     " mm in every row): the level never responds to the input, so no model can be "
+                     "identified and the Nrmse (eq. 19) is undefined (expected the recorded downstream level)");
+  }
   // The operating point the input moves about: the recording's `operating_opening_mm` metadata
   // when it has one (the canal settled there before the PRBS started, which may begin on +5 mm),
   // else the first command.

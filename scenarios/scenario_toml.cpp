@@ -44,7 +44,7 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
     g.submerged_discharge_coefficient =
         t.number("submerged_discharge_coefficient", g.submerged_coefficient(), {0.0, 5.0, true}, "");
   }
-  g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 100.0}, "m");
+  g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 1.0}, "m");
   g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
   g.controlled = t.boolean("controlled", g.controlled);
   t.reject_unknown_keys();
@@ -55,7 +55,9 @@ PoolSpec read_pool(TomlTable t) {
   PoolSpec p;
   p.name = t.string("name", p.name);
   p.length_m = t.required_number("length_m", kPositiveLength, "m");
-  p.bottom_width_m = t.required_number("bottom_width_m", {0.0, 1000.0, true}, "m");
+  // At least a millimetre: narrower pools (1e-6 m behind a gate) stall the steady-state Newton
+  // solve and, at 1e-300 m, overflow the velocities.
+  p.bottom_width_m = t.required_number("bottom_width_m", {0.001, 1000.0}, "m");
   p.side_slope = t.number("side_slope", p.side_slope, {0.0, 10.0}, "(horizontal per vertical)");
   p.wall_height_m = t.number("wall_height_m", p.wall_height_m, {0.0, 100.0, true}, "m");
   p.bed_slope = t.number("bed_slope", p.bed_slope, {-0.1, 0.1}, "m/m");
@@ -89,12 +91,13 @@ UpstreamSpec read_upstream(TomlTable t) {
                                  : UpstreamKind::recorded;
   u.level_m = t.number("level_m", u.level_m, {0.0, 100.0, true}, "m");
   u.discharge_m3s = t.number("discharge_m3s", u.discharge_m3s, {0.0, 1.0e5}, "m^3/s");
-  u.plan_area_m2 = t.number("plan_area_m2", u.plan_area_m2, kPositive, "m^2");
-  u.pump_m3s_per_hz = t.number("pump_m3s_per_hz", u.pump_m3s_per_hz, kPositive, "m^3/s per Hz");
+  // The reservoir's own limits (gates/reservoir.cpp, ReservoirOptions::validate).
+  u.plan_area_m2 = t.number("plan_area_m2", u.plan_area_m2, {0.0, 1.0e6, true}, "m^2");
+  u.pump_m3s_per_hz = t.number("pump_m3s_per_hz", u.pump_m3s_per_hz, {0.0, 100.0, true}, "m^3/s per Hz");
   u.max_frequency_hz = t.number("max_frequency_hz", u.max_frequency_hz, {0.0, 1000.0, true}, "Hz");
-  u.pid_kp = t.number("pid_kp", u.pid_kp, kNonNegative, "Hz/m");
-  u.pid_ti_s = t.number("pid_ti_s", u.pid_ti_s, kPositive, "s");
-  u.pid_td_s = t.number("pid_td_s", u.pid_td_s, kNonNegative, "s");
+  u.pid_kp = t.number("pid_kp", u.pid_kp, {0.0, 1.0e9}, "Hz/m");
+  u.pid_ti_s = t.number("pid_ti_s", u.pid_ti_s, {0.0, 1.0e9, true}, "s");
+  u.pid_td_s = t.number("pid_td_s", u.pid_td_s, {0.0, 1.0e6}, "s");
   t.reject_unknown_keys();
   return u;
 }
@@ -177,7 +180,7 @@ InputSpec read_input(TomlTable t) {
 EventSpec read_event(TomlTable t, const Scenario& s, double previous_t) {
   EventSpec ev;
   ev.t_s = t.required_number("t_s", {previous_t, 1.0e7}, "s (events in time order)");
-  ev.pool = t.integer("pool", 0, 0, static_cast<int>(s.pools.size()));
+  ev.pool = t.integer("pool", 0, 1, static_cast<int>(s.pools.size()));  // 0: not given
   const int offtakes = ev.pool > 0 ? static_cast<int>(s.pools[static_cast<std::size_t>(ev.pool - 1)].offtakes.size()) : 0;
   if (ev.pool > 0 && offtakes == 0) t.fail_value("pool", std::to_string(ev.pool), "expected a pool with offtakes");
   ev.offtake = t.integer("offtake", 1, 1, std::max(offtakes, 1));
@@ -257,11 +260,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
   return s;
 }
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
+std::string number(double v) { return format_value(v); }
 
 // Checks that span several keys. The TOML document, when the scenario came from one, lets a
 // message name the line of the key it blames: "FILE:LINE: key: what".
@@ -318,14 +317,21 @@ static void validate(const Scenario& s, const toml::table* document) {
   if (s.downstream.kind == DownstreamKind::gate && s.downstream.gate.controlled) ++controlled;
   if (controlled > 1) v.invalid("controlled", "more than one gate has controlled = true: expected at most one");
   const double last_length = s.pools.back().length_m;
-  if (s.sensors.downstream_sensor_x_m > last_length) {
-    v.invalid("sensors.downstream_sensor_x_m", "= " + number(s.sensors.downstream_sensor_x_m) +
-                                                    " m: expected at most the last pool's length (" +
-                                                    number(last_length) + " m)");
+  const auto check_sensor_position = [&](const SensorSpec& sensors, const std::string& key) {
+    if (sensors.downstream_sensor_x_m > last_length) {
+      v.invalid(key + ".downstream_sensor_x_m", "= " + number(sensors.downstream_sensor_x_m) +
+                                                   " m: expected at most the last pool's length (" +
+                                                   number(last_length) + " m)");
+    }
+  };
+  check_sensor_position(s.sensors, "sensors");
+  for (std::size_t i = 0; i < s.experiments.size(); ++i) {
+    if (s.experiments[i].sensors) check_sensor_position(*s.experiments[i].sensors, "experiments[" + std::to_string(i) + "].sensors");
   }
   const GateSpec* driven = nullptr;
   if (s.head_gate && s.head_gate->controlled) driven = &*s.head_gate;
   for (const auto& g : s.gates) if (g.controlled) driven = &g;
+  if (s.downstream.kind == DownstreamKind::gate && s.downstream.gate.controlled) driven = &s.downstream.gate;
   for (std::size_t i = 0; i < s.experiments.size(); ++i) {
     const auto& e = s.experiments[i];
     const std::string key = "experiments[" + std::to_string(i) + "]";

@@ -11,6 +11,8 @@
 
 #include "scenarios/design.hpp"
 #include "scenarios/prbs.hpp"
+#include "scenarios/run_cost.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/sensors.hpp"
 #include "scenarios/signals.hpp"
 #include "solver/steady_state.hpp"
@@ -119,14 +121,16 @@ std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const Drive& drive
 }
 
 std::shared_ptr<solver::Boundary> make_downstream(const Scenario& s, const solver::Reach& last,
-                                                  std::shared_ptr<gates::TailGateBoundary>* tail) {
+                                                  std::shared_ptr<gates::TailGateBoundary>* tail,
+                                                  std::shared_ptr<gates::GateOperation>* tail_operation,
+                                                  const std::function<double(double)>& command) {
   const DownstreamSpec& d = s.downstream;
   switch (d.kind) {
     case DownstreamKind::gate: {
       const double tail_level = d.tail_level_m;
+      *tail_operation = operation_for(d.gate, command);
       *tail = std::make_shared<gates::TailGateBoundary>(
-          gate_geometry(d.gate), [tail_level](double) { return tail_level; },
-          std::make_shared<gates::GateOperation>(d.gate.opening_m, d.gate.max_opening_m));
+          gate_geometry(d.gate), [tail_level](double) { return tail_level; }, *tail_operation);
       return *tail;
     }
     case DownstreamKind::weir: {
@@ -262,8 +266,14 @@ BuiltCanal build_canal(const Scenario& input, const ExperimentSpec& e, const Dri
     watch(b, op, [link] { return link->last_discharge(); }, s.gates[i].max_opening_m, s.gates[i].controlled);
   }
   const int last = b.canal.reach_count() - 1;
-  check(b.canal.set_boundary(last, solver::End::downstream, make_downstream(s, b.canal.reach(last), &b.tail_gate)),
+  std::shared_ptr<gates::GateOperation> tail_operation;
+  check(b.canal.set_boundary(last, solver::End::downstream,
+                             make_downstream(s, b.canal.reach(last), &b.tail_gate, &tail_operation, command)),
         s.source + ": downstream");
+  if (b.tail_gate && s.downstream.gate.controlled) {
+    auto tail = b.tail_gate;
+    watch(b, tail_operation, [tail] { return tail->last_discharge(); }, s.downstream.gate.max_opening_m, true);
+  }
   check(b.canal.check_ready(), s.source);
   if (!b.controlled) {
     auto inflow = b.head_inflow;
@@ -334,8 +344,17 @@ void warn_marched_start(const BuiltCanal& b, const Scenario& s, const Experiment
 // reservoir PID so that the pump delivers the gate discharge. Newton first; then the experiment's
 // settle_s of unrecorded marching (the command held at its operating point), or, when Newton is
 // off or fails, the longer of that and options.settle_time.
+// Steps to `t_end` (no probes: what advance_to does) with the run's cost guard after each step.
+void march_to(solver::Canal& canal, double t_end, RunCostGuard& guard, const std::string& what) {
+  while (canal.time() < t_end) {
+    const double before = canal.time();
+    check(canal.step(t_end - before), what);
+    guard.check(canal.statistics().steps, canal.time(), canal.time() - before);
+  }
+}
+
 InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options,
-                    const std::function<void(double)>& report) {
+                    const std::function<void(double)>& report, RunCostGuard& guard) {
   InitialState result;
   const double before_input = -1e-9;  // strictly before the input starts
   b.canal.set_time(before_input);
@@ -367,11 +386,15 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
     // Likewise the gates between pools: the steady flow entering the next pool.
     b.gate_links[i]->on_step_accepted(b.canal.time(), 0.0, b.canal.reach(static_cast<int>(i) + 1).discharge().front());
   }
+  if (b.tail_gate) {
+    const auto& last = b.canal.reach(b.canal.reach_count() - 1);
+    b.tail_gate->on_step_accepted(b.canal.time(), 0.0, last.discharge().back());
+  }
   if (marching > 0.0) {
     // Time marching: chunks for the progress line.
     result.progress_weight = 0.5;
     for (int k = 1; k <= 20; ++k) {
-      check(b.canal.advance_to(-marching + marching * k / 20.0), "settling");
+      march_to(b.canal, -marching + marching * k / 20.0, guard, "settling");
       report(result.progress_weight * k / 20.0);
     }
     const std::string marched = "time marching " + format_g(marching) + " s";
@@ -388,17 +411,20 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
 }  // namespace
 
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
+  const SensorSpec sensors = e.sensors.value_or(s.sensors);
+  check_run_cost(s, e, sensors.period_s, options.allow_long_run);
   BuiltCanal b = build_canal(s, e, options.drive);
   const bool fixed_input = e.input.kind == InputKind::constant && !options.drive.recording;
   if (!b.driven && !fixed_input) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");
-  const SensorSpec sensors = e.sensors.value_or(s.sensors);
 
   // Start from the steady state of the operating point (the command holds its t = 0 value before
   // t = 0): Newton on the discretised equations, or time marching if that fails or is not wanted.
   const auto report = [&](double fraction) {
     if (options.progress) options.progress({std::clamp(fraction, 0.0, 1.0), ""});
   };
-  const InitialState initial = settle(b, s, e, options, report);
+  report(0.0);
+  RunCostGuard guard(s, e, options.allow_long_run);
+  const InitialState initial = settle(b, s, e, options, report, guard);
 
   // Sampling: every channel read at t_k = k h from the true state, then through its sensor.
   const double h = sensors.period_s;
@@ -451,6 +477,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
                      check_depths()};
   };
   TrueState before = snapshot(), after = before;
+  WallWatch walls(s);
   std::size_t next_event = 0;
   // Instants at which the drive's command changes (SimulateOptions::step_to_command_changes).
   std::vector<double> breaks;
@@ -477,9 +504,11 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
                                                          : std::numeric_limits<double>::infinity();
       before = after;
       check(b.canal.step(std::min(to_event, to_break)), "experiment " + e.name);
+      guard.check(b.canal.statistics().steps, b.canal.time(), b.canal.time() - before.time);
       after = snapshot();
     }
     const TrueState now = interpolate(before, after, t);
+    walls.observe(b.canal, after.time);
     y_dwe.observe(t, now.end_depth);
     y_dw.observe(t, now.below_gate_depth);
     y_up.observe(t, now.upstream_level);
@@ -508,6 +537,7 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.set_meta("sampling_period_s", format_g(h));
   rec.set_meta("generator", "canalsim simulate");
   rec.set_meta("initial_state", initial.description);
+  record_run_report(rec, b.canal.total_balance(), b.canal.time(), walls);
   rec.set_column(columns::time, t_s);
   rec.set_column(columns::gate_command, u_mm);
   rec.set_column(columns::gate_position, in_mm(x_up.values()));

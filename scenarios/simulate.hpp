@@ -77,6 +77,8 @@ struct SimulateOptions {
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
+  // Past the ceilings of scenarios/run_cost.hpp (`--allow-long`).
+  bool allow_long_run = false;
   // When Newton fails: throw std::runtime_error naming the failure (true), or march for
   // settle_time with the command held at its operating point and warn, naming the state the
   // experiment then starts from (false). Never silent.

@@ -1,17 +1,25 @@
 #include "scenarios/toml_table.hpp"
 
+#include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <limits>
 
+#include "core/format.hpp"
 #include "core/recording.hpp"
 
 namespace canalsim::scenarios {
 std::string format_value(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
+  // Six digits unless they lose the value: cfl = 1.0000001 must not read "= 1" next to "(0, 1]".
+  if (std::strtod(buffer, nullptr) == v || !std::isfinite(v)) return buffer;
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, v).ptr;  // shortest round trip
+  return std::string(buffer, end);
 }
+
+std::string excerpt(const std::string& text) { return format_excerpt(text); }
 
 namespace {
 
@@ -64,7 +72,7 @@ void TomlTable::fail(const std::string& key, const std::string& what) const {
 }
 
 void TomlTable::fail_value(const std::string& key, const std::string& value, const std::string& what) const {
-  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = " + value + ": " + what);
+  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = " + excerpt(value) + ": " + what);
 }
 
 bool TomlTable::has(const std::string& key) const { return table_.contains(key); }
@@ -153,7 +161,7 @@ std::string TomlTable::choice(const std::string& key, const std::string& fallbac
     if (value == option) return value;
     list += (list.empty() ? "" : ", ") + std::string(option);
   }
-  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = \"" + value +
+  throw InputError(where(table_.get(key)) + ": " + dotted(key) + " = \"" + excerpt(value) +
                    "\": expected one of " + list);
 }
 
@@ -203,7 +211,7 @@ void TomlTable::reject_unknown_keys() const {
   for (const auto& [key, node] : table_) {
     const std::string name(key.str());
     if (!used_.count(name)) {
-      throw InputError(where(&node) + ": unknown key " + dotted(name) +
+      throw InputError(where(&node) + ": unknown key " + excerpt(dotted(name)) +
                        " (docs/scenarios.md lists the keys)");
     }
   }

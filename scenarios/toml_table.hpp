@@ -13,8 +13,12 @@
 
 namespace canalsim::scenarios {
 
-// A number as messages print it ("%g": 6 significant digits).
+// A number as messages print it ("%g": 6 significant digits, more when six would not tell it
+// from a neighbouring bound: 1.0000001).
 std::string format_value(double v);
+// A value echoed in a message: the first 60 characters and the length of a longer one, so that a
+// 1 MB field does not make a 1 MB error line.
+std::string excerpt(const std::string& text);
 
 // Inclusive or exclusive numeric range used in messages and checks.
 struct Range {

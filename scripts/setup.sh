@@ -4,12 +4,14 @@
 
 CANALSIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-# Build tools and libraries, all from Debian 12 (bookworm).
+# Build tools and libraries, all from Debian 12 (bookworm). clang-14 and libclang-rt-14-dev
+# (libFuzzer) build the fuzz targets only (fuzz/, scripts/fuzz); everything else uses g++.
 CANALSIM_PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsundials-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev libceres-dev
+  clang-14 libclang-rt-14-dev
 )
 
 canalsim_log() { printf '==> %s\n' "$*" >&2; }

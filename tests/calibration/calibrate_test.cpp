@@ -140,7 +140,7 @@ TEST(Calibrate, BadInputIsOneLineNamingWhatIsWrong) {
   // A recording of another canal (the ASCE canal 1) is refused, naming it.
   const Scenario asce = scenarios::builtin_scenario("asce1");
   scenarios::ExperimentSpec e = asce.experiments.front();
-  e.duration_s = 30.0;
+  e.duration_s = 120.0;  // two samples at its 60 s period: a run of fewer is refused (issue 16)
   Recording other = scenarios::simulate(asce, e);
   other.source = "asce1.csv";
   o.parameters = {};

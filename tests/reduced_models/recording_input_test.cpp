@@ -47,7 +47,7 @@ TEST(BadRecording, ConstantInputIsRejectedAsHavingNoExcitation) {
 }
 
 TEST(BadRecording, MissingUpstreamLevelIsReportedForNonlinearModels) {
-  const auto d = prepare_data(parse_recording("t_s,u_mm,y_dwe_mm\n0,5,2\n0.13,6,2\n", "bad.csv"));
+  const auto d = prepare_data(parse_recording("t_s,u_mm,y_dwe_mm\n0,5,2\n0.13,6,2.1\n", "bad.csv"));
   try {
     require_upstream_level(d, "nliom-f");
     FAIL();

@@ -266,7 +266,7 @@ TEST(AsceInput, HeadFlowThatDoesNotMatchTheOfftakesIsNamed) {
 
 TEST(AsceInput, EventOnAPoolThatDoesNotExistIsOneLine) {
   const std::string text = std::string(kTwoPools) + "[[experiments.events]]\nt_s = 60\npool = 3\nofftake_m3s = 0.4\n";
-  EXPECT_EQ(error_of(text), "two.toml:42: experiments[0].events[0].pool = 3: expected an integer in [0, 2]");
+  EXPECT_EQ(error_of(text), "two.toml:42: experiments[0].events[0].pool = 3: expected an integer in [1, 2]");
 }
 
 TEST(AsceInput, AnInputSignalWithoutAControlledGateIsNamed) {

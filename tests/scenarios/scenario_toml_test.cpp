@@ -70,7 +70,7 @@ TEST(ScenarioToml, ReadsValuesAndAppliesDocumentedDefaults) {
 TEST(ScenarioToml, NegativeWidthNamesFileLineKeyAndRange) {
   std::string text = kMinimal;
   text.replace(text.find("bottom_width_m = 0.08"), 21, "bottom_width_m = -0.08");
-  EXPECT_EQ(error_of(text), "s.toml:12: pools[0].bottom_width_m = -0.08: expected a number in (0, 1000] m");
+  EXPECT_EQ(error_of(text), "s.toml:12: pools[0].bottom_width_m = -0.08: expected a number in [0.001, 1000] m");
 }
 
 TEST(ScenarioToml, CflAboveOneIsRejected) {

@@ -1,0 +1,97 @@
+// The command line: subcommand registration, parsing and the one-line error contract.
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include "cli/command_line.hpp"
+#include "cli/commands.hpp"
+
+namespace {
+
+// The contract is one line per error; a message that spans lines (a library joining several
+// problems) is folded rather than letting the second line look like a separate error.
+std::string one_line(std::string message) {
+  while (!message.empty() && message.back() == '\n') message.pop_back();
+  for (std::string::size_type at = message.find('\n'); at != std::string::npos; at = message.find('\n', at)) {
+    message.replace(at, 1, "; ");
+  }
+  // The last guard against a huge value echoed somewhere (a 1 MB field): an error line stays short.
+  constexpr std::string::size_type kLongest = 2000;
+  if (message.size() > kLongest) message = message.substr(0, kLongest) + "... (message cut)";
+  return message;
+}
+
+std::string subcommand_list(const CLI::App& app) {
+  std::string names;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+  }
+  return names;
+}
+
+// Before a subcommand is recognised CLI11 only knows that one is missing ("A subcommand is
+// required", even for `canalsim foo`); say what was typed instead and list what exists.
+std::string top_level_problem(const CLI::App& app, int argc, char** argv) {
+  const std::string expected = "expected a subcommand: " + subcommand_list(app) + " (see canalsim --help)";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.empty() || arg[0] != '-') return "unknown subcommand '" + arg + "'; " + expected;
+  }
+  if (argc > 1) return "unknown option '" + std::string(argv[1]) + "'; " + expected;
+  return "no subcommand given; " + expected;
+}
+
+// CLI11 prints its errors on two lines ("... Run with --help ...") and exits with its own codes
+// (105, 106, 109); canalsim errors are one line "canalsim: error: ..." and exit status 1. Help
+// requests still print the help and exit 0; RuntimeError carries a subcommand's own exit status
+// after it has printed its error.
+int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  if (e.get_exit_code() == 0 || e.get_name() == "RuntimeError") return app.exit(e);
+  const auto chosen = app.get_subcommands();
+  std::string message = e.what();
+  if (chosen.empty()) {
+    message = top_level_problem(app, argc, argv);
+  } else if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
+    const std::string sub = chosen.front()->get_name();
+    const std::string::size_type colon = message.find(": ");
+    const std::string extras = colon == std::string::npos ? message : message.substr(colon + 2);
+    message = "unexpected argument(s) for canalsim " + sub + ": " + extras + " (see canalsim " + sub + " --help)";
+  }
+  std::cerr << "canalsim: error: " << one_line(message) << '\n';
+  return 1;
+}
+
+}  // namespace
+
+namespace canalsim::cli {
+
+void add_all_commands(CLI::App& app) {
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Print help for every subcommand");
+  add_version_command(app);
+  add_dambreak_command(app);
+  add_prbs_command(app);
+  add_fit_command(app);
+  add_resample_command(app);
+  add_reproduce_command(app);
+  add_scenarios_command(app);
+  add_simulate_command(app);
+  add_calibrate_command(app);
+  add_diagnose_command(app);
+  add_blindtest_command(app);
+  add_linearize_command(app);
+}
+
+int run_command_line(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return report_parse_error(app, e, argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "canalsim: error: " << one_line(e.what()) << '\n';
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace canalsim::cli
