@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cmath>
+#include <initializer_list>
+#include <utility>
 #include <cstdint>
 #include <numbers>
 #include <random>
@@ -76,6 +78,11 @@ inline Recording synthetic_recording(const Model& truth, const SyntheticSpec& s)
   rec.set_column("y_up_mm", d.y_up_mm);
   rec.set_column("y_dwe_mm", y);
   return rec;
+}
+
+// Sets several parameters of a model at once: set_parameters(m, {{"K", 0.68}, {"T", 1.71}}).
+inline void set_parameters(Model& m, std::initializer_list<std::pair<const char*, double>> values) {
+  for (const auto& [name, value] : values) reduced::set_parameter(m.p, name, value);
 }
 
 }  // namespace canalsim::testing

@@ -16,10 +16,7 @@ namespace testing = canalsim::testing;
 
 ExperimentData lfom_data(std::size_t n) {
   Model truth{ModelKind::lfom, {}, {}};
-  truth.p.K = 1.1;
-  truth.p.T = 2.06;
-  truth.p.lambda = 0.54;
-  truth.p.L = 4.9;
+  testing::set_parameters(truth, {{"K", 1.1}, {"T", 2.06}, {"lambda", 0.54}, {"L", 4.9}});
   testing::SyntheticSpec spec;
   spec.n = n;
   return prepare_data(testing::synthetic_recording(truth, spec));
@@ -95,11 +92,7 @@ BENCHMARK(BM_LiomFitSlowPoolStepTest)->Arg(1000000)->Unit(benchmark::kMillisecon
 
 void BM_NlfomSFit(benchmark::State& state) {
   Model truth{ModelKind::nlfom_s, {}, {}};
-  truth.p.K = 1.56;
-  truth.p.T = 2.3;
-  truth.p.lambda = 0.66;
-  truth.p.gamma = 0.6;
-  truth.p.L = 4.9;
+  testing::set_parameters(truth, {{"K", 1.56}, {"T", 2.3}, {"lambda", 0.66}, {"gamma", 0.6}, {"L", 4.9}});
   truth.p.head_ref_mm = 15.0;
   testing::SyntheticSpec spec;
   spec.n = static_cast<std::size_t>(state.range(0));
@@ -120,11 +113,7 @@ BENCHMARK(BM_NlfomSFit)->Arg(2044)->Unit(benchmark::kMillisecond)->UseRealTime()
 // threads (the CLI's `--gamma 0:10:0.05`).
 void BM_GammaSweepNlfomF(benchmark::State& state) {
   Model truth{ModelKind::nlfom_f, {}, {}};
-  truth.p.K = 0.78;
-  truth.p.T = 0.77;
-  truth.p.lambda = 0.57;
-  truth.p.gamma = 3.25;
-  truth.p.L = 4.9;
+  testing::set_parameters(truth, {{"K", 0.78}, {"T", 0.77}, {"lambda", 0.57}, {"gamma", 3.25}, {"L", 4.9}});
   truth.p.head_ref_mm = 60.0;
   const std::vector<ExperimentData> data{
       prepare_data(testing::synthetic_recording(truth, testing::SyntheticSpec{}))};

@@ -22,9 +22,7 @@ using testing::synthetic_recording;
 
 Model liom(double K, double T, double L) {
   Model m{ModelKind::liom, {}, {}};
-  m.p.K = K;
-  m.p.T = T;
-  m.p.L = L;
+  testing::set_parameters(m, {{"K", K}, {"T", T}, {"L", L}});
   return m;
 }
 
@@ -129,10 +127,7 @@ TEST(ModelDiagnosis, AConcealedPoolResonanceIsNamedAndItsFrequencyRecoveredWithi
 
 TEST(ModelDiagnosis, AnUpstreamLevelSwingUnmodelledByTheLinearModelIsNamed) {
   Model truth{ModelKind::nliom_s, {}, {}};
-  truth.p.K = 1.6;
-  truth.p.T = 2.1;
-  truth.p.gamma = 0.6;
-  truth.p.L = 4.9;
+  testing::set_parameters(truth, {{"K", 1.6}, {"T", 2.1}, {"gamma", 0.6}, {"L", 4.9}});
   truth.p.head_ref_mm = 15.0;
   const auto rec = synthetic_recording(truth, two_periods());
   const auto d = diagnose_model({rec}, options_for(ModelKind::liom, {"upstream_level_variation", "gate_rate_limit"}));

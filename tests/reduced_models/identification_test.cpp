@@ -24,11 +24,7 @@ struct Case {
 
 Model make(ModelKind kind, double K, double T, double lambda, double gamma, double L) {
   Model m{kind, {}, {}};
-  m.p.K = K;
-  m.p.T = T;
-  m.p.lambda = lambda;
-  m.p.gamma = gamma;
-  m.p.L = L;
+  testing::set_parameters(m, {{"K", K}, {"T", T}, {"lambda", lambda}, {"gamma", gamma}, {"L", L}});
   return m;
 }
 

@@ -1,5 +1,6 @@
 // Tests of reduced_models/metrics.*: Nrmse (eq. 19), IAE (eq. 20), IAE_c (eq. 21), Δp (eq. 22).
 #include "reduced_models/metrics.hpp"
+#include "testing/synthetic.hpp"
 
 #include <gtest/gtest.h>
 

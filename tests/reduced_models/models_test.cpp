@@ -35,9 +35,7 @@ TEST(ModelNames, RoundTripAndAcceptUnderscoresAndCase) {
 TEST(Liom, StepSettlesAtTheGainTimesTheStepAfterTheDelay) {
   const auto d = step_data(2000, 0.13, 5.0);
   Model m{ModelKind::liom, {}, {}};
-  m.p.K = 0.6;
-  m.p.T = 1.7;
-  m.p.L = 4.9;
+  testing::set_parameters(m, {{"K", 0.6}, {"T", 1.7}, {"L", 4.9}});
   const auto y = simulate(m, d).y_dwe_mm;
   EXPECT_NEAR(y.back(), 40.0 + 3.0, 1e-9);
   const auto delay_samples = static_cast<std::size_t>(4.9 / 0.13);  // 37.69
@@ -59,10 +57,7 @@ TEST(FractionalDelay, CommutesWithTheGlRecursionForLinearModels) {
   // The fitter relies on this to re-delay a cached unit response instead of re-simulating.
   const auto d = step_data(1500, 0.13, 2.0, 30);
   Model m{ModelKind::lfom, {}, {}};
-  m.p.K = 1.3;
-  m.p.T = 1.1;
-  m.p.lambda = 0.55;
-  m.p.L = 3.37;
+  testing::set_parameters(m, {{"K", 1.3}, {"T", 1.1}, {"lambda", 0.55}, {"L", 3.37}});
   const auto delayed_input_response = simulate(m, d).y_dwe_mm;
   Model undelayed = m;
   undelayed.p.L = 0.0;
@@ -78,9 +73,7 @@ TEST(FractionalDelay, CommutesWithTheGlRecursionForLinearModels) {
 TEST(Sopd, IsTwoCascadedFirstOrderLagsWithUnitStaticGainTimesK) {
   const auto d = step_data(3000, 0.13, 1.0);
   Model sopd{ModelKind::sopd, {}, {}};
-  sopd.p.K = 2.0;
-  sopd.p.T = 1.0;
-  sopd.p.T2 = 0.5;
+  testing::set_parameters(sopd, {{"K", 2.0}, {"T", 1.0}, {"T2", 0.5}});
   const auto y = simulate(sopd, d).y_dwe_mm;
   EXPECT_NEAR(y.back(), 42.0, 1e-9);
   // Slower start than a single lag: second-order response has zero initial slope.
@@ -93,9 +86,7 @@ TEST(Sopd, IsTwoCascadedFirstOrderLagsWithUnitStaticGainTimesK) {
 TEST(Lfom, ShortMemorySteadyStateCarriesTheTruncationBias) {
   const auto d = step_data(6000, 0.13, 1.0);
   Model m{ModelKind::lfom, {}, {}};
-  m.p.K = 1.0;
-  m.p.T = 2.0;
-  m.p.lambda = 0.5;
+  testing::set_parameters(m, {{"K", 1.0}, {"T", 2.0}, {"lambda", 0.5}});
   const auto y = simulate(m, d).y_dwe_mm;
   EXPECT_NEAR(y.back() - 40.0, short_memory_steady_state(2.0, 0.5, 0.13, 500), 1e-9);
 }
@@ -104,9 +95,7 @@ TEST(NonlinearFree, GainScalesWithUpstreamLevelOverHeadReferenceToTheGamma) {
   auto d = step_data(3000, 0.13, 1.0);
   d.y_up_mm.assign(d.size(), 66.0);
   Model m{ModelKind::nliom_f, {}, {}};
-  m.p.K = 1.0;
-  m.p.T = 0.5;
-  m.p.gamma = 2.0;
+  testing::set_parameters(m, {{"K", 1.0}, {"T", 0.5}, {"gamma", 2.0}});
   m.p.head_ref_mm = 60.0;
   const auto y = simulate(m, d).y_dwe_mm;
   EXPECT_NEAR(y.back() - 40.0, std::pow(66.0 / 60.0, 2.0), 1e-9);
@@ -116,11 +105,7 @@ TEST(NonlinearFree, GainScalesWithUpstreamLevelOverHeadReferenceToTheGamma) {
 TEST(NonlinearFree, WithGammaZeroEqualsTheLinearModel) {
   const auto d = step_data(1000, 0.13, 3.0, 10);
   Model nl{ModelKind::nlfom_f, {}, {}};
-  nl.p.K = 0.8;
-  nl.p.T = 1.3;
-  nl.p.lambda = 0.6;
-  nl.p.gamma = 0.0;
-  nl.p.L = 1.0;
+  testing::set_parameters(nl, {{"K", 0.8}, {"T", 1.3}, {"lambda", 0.6}, {"gamma", 0.0}, {"L", 1.0}});
   Model lin = nl;
   lin.kind = ModelKind::lfom;
   EXPECT_EQ(simulate(nl, d).y_dwe_mm, simulate(lin, d).y_dwe_mm);
@@ -130,9 +115,7 @@ TEST(NonlinearSubmerged, HeadUsesTheModelsOwnOutputSoTheStepSettlesWhereTheFlowL
   // Steady state of T D Δy + Δy = K ((y_up − y0 − Δy)/H)^γ Δu: Δy = K ((60 − 40 − Δy)/20)^γ Δu.
   const auto d = step_data(4000, 0.13, 4.0);
   Model m{ModelKind::nliom_s, {}, {}};
-  m.p.K = 1.0;
-  m.p.T = 1.0;
-  m.p.gamma = 0.5;
+  testing::set_parameters(m, {{"K", 1.0}, {"T", 1.0}, {"gamma", 0.5}});
   m.p.head_ref_mm = 20.0;
   const double dy = simulate(m, d).y_dwe_mm.back() - 40.0;
   EXPECT_NEAR(dy, 1.0 * std::sqrt((20.0 - dy) / 20.0) * 4.0, 1e-6);
@@ -183,13 +166,13 @@ TEST(Hybrid, SwitchesBetweenTheFreeAndSubmergedTermsByTheFlowCondition) {
   s.noise = 0.0;
   s.quantum = 0.0;
   Model m{ModelKind::hybrid, {}, {}};
-  m.p.K = 0.8;
-  m.p.T = 1.5;
-  m.p.lambda = 0.6;
-  m.p.gamma = 2.0;
-  m.p.L = 2.0;
-  m.p.K_sub = 1.5;
-  m.p.gamma_sub = 0.5;
+  testing::set_parameters(m, {{"K", 0.8},
+                                  {"T", 1.5},
+                                  {"lambda", 0.6},
+                                  {"gamma", 2.0},
+                                  {"L", 2.0},
+                                  {"K_sub", 1.5},
+                                  {"gamma_sub", 0.5}});
   m.p.head_ref_mm = 60.0;
   m.p.head_ref_sub_mm = 15.0;
   const auto rec = testing::synthetic_recording(m, s);

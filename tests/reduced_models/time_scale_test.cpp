@@ -63,9 +63,7 @@ void expect_fopdt_recovered(const StepTest& s) {
   EXPECT_NEAR(r.model.p.T, s.T, 0.05 * s.T);
   EXPECT_NEAR(r.model.p.L, s.L, std::max(2.0 * s.h, s.T / 250.0));
   Model truth{ModelKind::liom, {}, {}};
-  truth.p.K = s.K;
-  truth.p.T = s.T;
-  truth.p.L = s.L;
+  testing::set_parameters(truth, {{"K", s.K}, {"T", s.T}, {"L", s.L}});
   EXPECT_LE(r.iae_total, 1.02 * validate_model(truth, data).iae);
   EXPECT_GT(r.nrmse.front(), 90.0);
 }
@@ -177,10 +175,7 @@ TEST(CanalControlModels, FrequencyResponsesAreTheIntegratorsAndTheZeros) {
 // gain following the upstream level): the model that contains another fits at least as well.
 TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
   Model truth{ModelKind::sopd, {}, {}};
-  truth.p.K = 0.8;
-  truth.p.T = 3.0;
-  truth.p.T2 = 0.8;
-  truth.p.L = 2.5;
+  testing::set_parameters(truth, {{"K", 0.8}, {"T", 3.0}, {"T2", 0.8}, {"L", 2.5}});
   testing::SyntheticSpec spec;
   spec.n = 1500;
   spec.y_up_swing = 8.0;

@@ -91,9 +91,7 @@ TEST(StudyData, TakesTheOperatingPointFromTheMetadata) {
 TEST(ModelTable, RecoversTheParametersOfAKnownLfom) {
   Model truth;
   truth.kind = ModelKind::lfom;
-  truth.p.K = 0.8;
-  truth.p.T = 1.3;
-  truth.p.lambda = 0.6;
+  testing::set_parameters(truth, {{"K", 0.8}, {"T", 1.3}, {"lambda", 0.6}});
   truth.p.L = 4.94;  // 38 samples of 0.13 s
   std::map<std::string, ExperimentData> data;
   for (const auto& [name, u0] : {std::pair{"op1", 15.0}, std::pair{"op2", 25.0}}) {
