@@ -117,12 +117,13 @@ void run_reproduce(const ReproduceArguments& args) {
   progress.report({1.0, "writing the report"}, true);
   const std::string json = study::to_json(result).dump(1) + "\n";
   const std::string md = study::to_markdown(result);
-  const std::string html = study::to_html(result, recordings, options);
-  // The Bode section (docs/linearization.md §6): files of their own, the tables stay as they were.
+  // The Bode section (docs/linearization.md §6): in report.html and in files of its own; the tables
+  // stay as they were.
   const auto bode = study::bode_sections(scenarios::builtin_scenario("lab"), result);
   const std::string bode_json = study::bode_json(bode).dump(1) + "\n";
   const std::string bode_md = study::bode_markdown(bode);
   const std::string bode_html = study::bode_html(bode);
+  const std::string html = study::to_html(result, recordings, options, study::bode_html_section(bode));
   progress.finish();
 
   // Write: all or nothing. A file that cannot be replaced restores the others' previous contents

@@ -190,10 +190,15 @@ std::string bode_markdown(const std::vector<BodeSection>& sections) {
 }
 
 std::string bode_html(const std::vector<BodeSection>& sections) {
+  return "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Bode: the linearised pool and the fitted "
+         "models</title></head><body style=\"font-family:sans-serif;max-width:700px\">" +
+         bode_html_section(sections, "h1", "h2") + "</body></html>\n";
+}
+
+std::string bode_html_section(const std::vector<BodeSection>& sections, const std::string& title_tag,
+                              const std::string& point_tag) {
   std::ostringstream page;
-  page << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Bode: the linearised pool and the fitted "
-          "models</title></head><body style=\"font-family:sans-serif;max-width:700px\">"
-       << "<h1>Bode: the linearised pool against the fitted LIOM and LFOM</h1><p>Gate → y_dwe in mm/mm over each "
+  page << "<" << title_tag << ">Bode: the linearised pool against the fitted LIOM and LFOM</" << title_tag << "><p>Gate → y_dwe in mm/mm over each "
           "experiment's PRBS band (docs/linearization.md). <span style=\"color:#000\">PDE (linearised)</span>, "
           "<span style=\"color:#1f77b4\">LIOM</span>, <span style=\"color:#d62728\">LFOM</span> fitted to the "
           "recording.</p>";
@@ -203,14 +208,14 @@ std::string bode_html(const std::vector<BodeSection>& sections) {
       for (const auto& v : g) out.push_back(20.0 * std::log10(std::abs(v)));
       return out;
     };
-    page << "<h2>" << html::escape(b.experiment) << " (" << format_g(b.operating_opening_mm, 3) << " mm)</h2><p>"
+    page << "<" << point_tag << ">" << html::escape(b.experiment) << " (" << format_g(b.operating_opening_mm, 3)
+         << " mm)</" << point_tag << "><p>"
          << html::escape(b.sentence) << "</p>"
          << svg_panel(b.omega, {db(b.pde), db(b.liom), db(b.lfom)}, "dB")
          << svg_panel(b.omega, {unwrapped_degrees(b.pde), unwrapped_degrees(b.liom), unwrapped_degrees(b.lfom)}, "deg")
          << "<p style=\"font-size:small\">ω [rad/s], " << format_g(b.band.low, 3) << " to " << format_g(b.band.high, 3)
          << "</p>";
   }
-  page << "</body></html>\n";
   return page.str();
 }
 

@@ -44,5 +44,9 @@ std::string bode_markdown(const std::vector<BodeSection>& sections);
 // A self-contained page: per operating point its sentence and a Bode plot (gain in dB, phase in
 // degrees against log ω) of the PDE, the LIOM and the LFOM, drawn as inline SVG (no script).
 std::string bode_html(const std::vector<BodeSection>& sections);
+// The same content as a section of another page (report.html's Bode section), under a heading
+// `title_tag` with one `point_tag` heading per operating point.
+std::string bode_html_section(const std::vector<BodeSection>& sections, const std::string& title_tag = "h2",
+                              const std::string& point_tag = "h3");
 
 }  // namespace canalsim::study

@@ -13,7 +13,8 @@ namespace canalsim::study {
 // inline; no network).
 nlohmann::json to_json(const StudyResult& result);
 std::string to_markdown(const StudyResult& result);
+// `extra_section`: HTML placed after the figures (reproduce passes the Bode section, study/bode.hpp).
 std::string to_html(const StudyResult& result, const std::map<std::string, Recording>& recordings,
-                    const StudyOptions& options = {});
+                    const StudyOptions& options = {}, const std::string& extra_section = "");
 
 }  // namespace canalsim::study

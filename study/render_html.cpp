@@ -125,7 +125,7 @@ nlohmann::json series(const std::string& name, const std::vector<double>& x, con
 }  // namespace
 
 std::string to_html(const StudyResult& r, const std::map<std::string, Recording>& recordings,
-                    const StudyOptions& options) {
+                    const StudyOptions& options, const std::string& extra_section) {
   const std::size_t points = options.plot_points;
   nlohmann::json data;
   // Recorded vs model responses: fitted models at op1–op4, nominal models at the validation points.
@@ -226,7 +226,7 @@ std::string to_html(const StudyResult& r, const std::map<std::string, Recording>
        << "<h2>PRBS spectrum (Figure 4)</h2><p><small>Design half-power bandwidth "
        << format_fixed(r.spectrum.bandwidth_design_rad_s, 3) << " rad/s, measured " << format_fixed(r.spectrum.bandwidth_measured_rad_s, 3)
        << " rad/s, paper 5.58 rad/s.</small></p><div id=\"spectrum\"></div>\n"
-       << "<script>\nconst DATA = ";
+       << extra_section << "<script>\nconst DATA = ";
   std::string json = data.dump();
   // Keep "</script>" out of the inline data.
   for (std::size_t p = json.find("</"); p != std::string::npos; p = json.find("</", p + 2)) json.replace(p, 2, "<\\/");

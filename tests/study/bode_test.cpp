@@ -48,6 +48,13 @@ TEST(BodeSection, ThePageDrawsGainAndPhaseForEachOperatingPoint) {
   EXPECT_EQ(page.find("nan"), std::string::npos);
   EXPECT_NE(bode_markdown({b}).find("| 1 | 0.707 | 0.636 | 0.778 | -45 | -45 | -45 |"), std::string::npos)
       << bode_markdown({b});
+  // report.html's Bode section: the same plots, one level down in the heading hierarchy, no page
+  // wrapper of its own.
+  const std::string part = bode_html_section({b});
+  EXPECT_NE(part.find("<h2>Bode"), std::string::npos);
+  EXPECT_NE(part.find("<h3>op&lt;1&gt;"), std::string::npos);
+  EXPECT_NE(part.find("<svg"), std::string::npos);
+  EXPECT_EQ(part.find("<body"), std::string::npos);
 }
 
 }  // namespace
