@@ -120,6 +120,24 @@ TEST(FrictionlessPool, ConvergesToTheClosedFormUnderRefinement) {
 
 // --- (b) small-amplitude nonlinear runs ---------------------------------------------------------
 
+// Amplitude and phase of the sine at ω in a channel of a recording, in metres: least squares on
+// [1, sin, cos] over [settle, settle + fitted) (normal equations, 3 x 3); the phasor b + i·c of
+// b sin ωt + c cos ωt.
+Complex sine_phasor_m(const Recording& rec, const std::string& channel, double omega, double settle, double fitted) {
+  const auto& time = rec.column("t_s");
+  const auto& y = rec.column(channel);
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < time.size(); ++k) {
+    if (time[k] < settle || time[k] >= settle + fitted - 1e-9) continue;
+    const Eigen::Vector3d basis(1.0, std::sin(omega * time[k]), std::cos(omega * time[k]));
+    m += basis * basis.transpose();
+    rhs += basis * y[k] * 1e-3;
+  }
+  const Eigen::Vector3d coefficients = m.ldlt().solve(rhs);
+  return Complex(coefficients(1), coefficients(2));
+}
+
 // Response of the simulator's y_dwe (no quantisation, no noise) to u = u_op + a sin ωt, fitted
 // over whole periods after the transient: y ≈ y0 + a (Re G sin ωt + Im G cos ωt).
 Complex simulated_response(const scenarios::Scenario& lab, const scenarios::ExperimentSpec& op, double omega,
@@ -148,19 +166,7 @@ Complex simulated_response(const scenarios::Scenario& lab, const scenarios::Expe
   scenarios::SimulateOptions options;
   options.drive.recording = &drive;
   const Recording rec = scenarios::simulate(lab, e, options);
-  const auto& time = rec.column("t_s");
-  const auto& y = rec.column("y_dwe_mm");
-  // Least squares on [1, sin, cos] over the fitted window (normal equations, 3 x 3).
-  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < time.size(); ++k) {
-    if (time[k] < settle || time[k] >= settle + fitted - 1e-9) continue;
-    const Eigen::Vector3d basis(1.0, std::sin(omega * time[k]), std::cos(omega * time[k]));
-    m += basis * basis.transpose();
-    rhs += basis * y[k] * 1e-3;
-  }
-  const Eigen::Vector3d coefficients = m.ldlt().solve(rhs);
-  return Complex(coefficients(1), coefficients(2)) / amplitude_m;
+  return sine_phasor_m(rec, "y_dwe_mm", omega, settle, fitted) / amplitude_m;
 }
 
 TEST(LabCanal, MatchesSmallAmplitudeSineRunsOfTheNonlinearModel) {
@@ -342,18 +348,7 @@ TEST(FrictionlessPool, TheCentredKinkRuleMatchesTheNonlinearSchemeAtAFlatState) 
     sensors.resolution_mm = 0.0;
     e.sensors = sensors;
     const Recording rec = scenarios::simulate(s, e);
-    const auto& time = rec.column("t_s");
-    const auto& y = rec.column("y_dw_mm");
-    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-    for (std::size_t k = 0; k < time.size(); ++k) {
-      if (time[k] < settle || time[k] >= settle + fitted - 1e-9) continue;
-      const Eigen::Vector3d basis(1.0, std::sin(omega * time[k]), std::cos(omega * time[k]));
-      m += basis * basis.transpose();
-      rhs += basis * y[k] * 1e-3;
-    }
-    const Eigen::Vector3d c = m.ldlt().solve(rhs);
-    const Complex simulated = Complex(c(1), c(2)) / amplitude;
+    const Complex simulated = sine_phasor_m(rec, "y_dw_mm", omega, settle, fitted) / amplitude;
     const Complex linear = frequency_response(sys, {omega}).front();
     EXPECT_NEAR(std::abs(linear) / std::abs(simulated), 1.0, 0.02) << "omega " << omega << ": " << linear << " vs " << simulated;
     EXPECT_LT(phase_error_degrees(linear, simulated), 2.0) << "omega " << omega << ": " << linear << " vs " << simulated;
