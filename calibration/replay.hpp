@@ -40,9 +40,10 @@ struct ReplayOptions {
   // and the switch instants (off keeps the diagnosis' sampled drive in that case).
   bool clock_with_upstream = false;
   double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
-  // Leading seconds of every recording left out of the compared series: what happened before
-  // the recording started is unknown, so its first transient may differ.
-  double warmup_s = 10.0;        // >= 0; at most a third of a recording is dropped
+  // Leading seconds of every recording left out of the compared series (at most a third of a
+  // recording is dropped). None by default: the replay starts from the steady state of the
+  // recording's own initial state, so every sample after it is comparable.
+  double warmup_s = 0.0;         // >= 0
   // Start each replay from the steady state at the recording's own first upstream level
   // (Replay::initial_upstream_mm, less the scenario's y_up sensor offsets) instead of the
   // scenario's upstream level_m (upstream kinds "level" and "reservoir").

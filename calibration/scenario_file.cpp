@@ -2,6 +2,7 @@
 
 #include "core/text.hpp"
 
+#include <cmath>
 #include <map>
 #include <sstream>
 
@@ -72,6 +73,27 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
   }
   std::string out;
   for (const auto& line : lines) out += line + "\n";
+  return out;
+}
+
+std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations) {
+  std::string out;
+  std::map<std::string, int> counts;
+  bool skipping = false;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    const std::string h = header_of(line, counts);
+    if (!h.empty()) skipping = h == "calibration" || h == "calibration.std";
+    if (!skipping) out += line + "\n";
+  }
+  while (out.size() >= 2 && out.compare(out.size() - 2, 2, "\n\n") == 0) out.pop_back();
+  out += "\n[calibration.std]  # one standard deviation of each calibrated parameter (canalsim calibrate);\n"
+         "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n";
+  for (const auto& [name, sd] : deviations) {
+    if (!std::isfinite(sd)) continue;
+    const std::string key = name.find('.') == std::string::npos ? name : "\"" + name + "\"";
+    out += key + " = " + format_g(sd, 6) + "\n";
+  }
   return out;
 }
 

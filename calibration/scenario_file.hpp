@@ -3,6 +3,7 @@
 // keeps its layout and comments and `simulate`, `diagnose` and `calibrate` read it as any other.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,5 +22,12 @@ struct KeyEdit {
 // none. Throws InputError naming the key when it cannot be placed (an array element the file
 // lacks). Values are written with 10 significant digits.
 std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdit>& edits);
+
+// The TOML text with its [calibration.std] table (docs/scenarios.md) replaced by one holding
+// `deviations` — calibration parameter name → one standard deviation — appended at the end; names with a
+// dot ("manning_n.1") are quoted. A previous [calibration] or [calibration.std] table is removed
+// first, so a calibrated file calibrated again carries only the new figures. Non-finite
+// deviations (not determined by the data) are left out.
+std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations);
 
 }  // namespace canalsim::calibration

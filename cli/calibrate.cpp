@@ -6,6 +6,7 @@
 // only when the calibration succeeded.
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "calibration/calibrate.hpp"
@@ -57,8 +58,10 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   }
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
+  std::map<std::string, double> deviations;  // [calibration.std]: what diagnose takes as left open
+  for (const auto& p : c.parameters) deviations[p.name] = p.std;
   std::string out = "# Calibrated by canalsim calibrate from " + args.scenario + " on" + recordings + "\n" +
-                    calibration::edit_scenario_toml(text, edits);
+                    calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations);
   const scenarios::Scenario back = scenarios::parse_scenario(out, args.out);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +

@@ -1,7 +1,9 @@
 // `canalsim diagnose --scenario S REC.csv... [--json F] [--report F.html]`: replays each
 // recording's gate command through the scenario, locates where model and recordings disagree,
 // names the missing physics from the catalog, refits it and shows the fit improve
-// (docs/diagnosis.md). `canalsim diagnose --model M REC.csv...` does the same for a reduced model
+// (docs/diagnosis.md). With `--baseline BASE.csv... --` the scenario is first calibrated on the
+// baseline recordings and the recordings are diagnosed against the calibrated scenario
+// (diagnosis/baseline.hpp). `canalsim diagnose --model M REC.csv...` does the same for a reduced model
 // (diagnosis/model_diagnosis.hpp). Prints a summary; the JSON and HTML are written atomically and only when
 // the whole diagnosis succeeded.
 #include <fstream>
@@ -12,6 +14,8 @@
 #include "cli/checks.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
+#include "core/declared_units.hpp"
+#include "diagnosis/baseline.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
 #include "reduced_models/models.hpp"
@@ -31,6 +35,7 @@ struct DiagnoseArguments {
   double gate_speed_mm_s = 0.0;
   std::optional<double> upstream_level_mm;
   std::vector<std::string> recordings;
+  std::vector<std::string> baseline;
   std::string json;
   std::string report;
   std::vector<std::string> candidates;
@@ -57,8 +62,10 @@ void check_outputs(const DiagnoseArguments& args) {
 
 // The JSON and the HTML report are written together, all or nothing: a report that cannot be
 // written leaves no JSON behind either (and replaces neither).
-int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title) {
-  const nlohmann::json json = diagnosis::to_json(d);
+int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title,
+                  const nlohmann::json& baseline = nullptr) {
+  nlohmann::json json = diagnosis::to_json(d);
+  if (!baseline.is_null()) json["baseline"] = baseline;
   if (d.ok) require_finite_figures(json, "diagnosis");
   std::cout << diagnosis::text_summary(d);
   if (!d.ok) {
@@ -112,27 +119,70 @@ void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Record
   }
 }
 
-int run(const DiagnoseArguments& args) {
-  if (args.scenario.empty() == args.model.empty()) {
-    throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
-  }
-  check_outputs(args);
-  if (!args.model.empty()) return run_model(args);
-  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
-  // One line for the first problem (it names the recording); the user reruns to see the next.
-  std::vector<Recording> recordings = read_all(args.recordings);
-  if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
-    throw InputError(problems.front() + " (scenario " + s.name + ")");
-  }
-
-  check_diagnosis_cost(s, recordings, args);
-
+diagnosis::DiagnoseOptions diagnose_options(const DiagnoseArguments& args) {
   diagnosis::DiagnoseOptions options;
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
   options.threads = args.threads;
   options.use_recorded_upstream = args.recorded_upstream;
   options.reconstruct_clock = !args.no_clock;
+  return options;
+}
+
+// --baseline: calibrate on the baseline, print the calibrated values, diagnose the recordings
+// against the calibrated scenario. Every check (baseline against recordings, both against the
+// scenario) runs before the calibration, and nothing is written unless both steps succeed.
+int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>& recordings, const DiagnoseArguments& args) {
+  const std::vector<Recording> baseline = read_all(args.baseline);
+  if (const auto problems = diagnosis::check_baseline(baseline, recordings); !problems.empty()) {
+    throw InputError(problems.front());
+  }
+  if (const auto problems = diagnosis::check_recordings(s, baseline); !problems.empty()) {
+    throw InputError(problems.front() + " (baseline; scenario " + s.name + ")");
+  }
+  diagnosis::BaselineOptions options;
+  options.diagnosis = diagnose_options(args);
+  ProgressLine progress("calibrating " + s.name + " on " + std::to_string(baseline.size()) + " baseline recording(s), then diagnosing " +
+                        std::to_string(recordings.size()));
+  options.progress = progress.callback();
+  const diagnosis::BaselineDiagnosis r = diagnosis::diagnose_with_baseline(s, baseline, recordings, options);
+  progress.finish();
+  if (!r.calibration.ok) {
+    std::cerr << "canalsim: error: calibration on the baseline failed: " << r.calibration.message << '\n';
+    return 1;
+  }
+  std::cout << diagnosis::baseline_summary(r);
+  return write_outputs(r.diagnosis, args, "canalsim diagnosis: " + s.name + " calibrated on a baseline",
+                       diagnosis::baseline_json(r));
+}
+
+int run(const DiagnoseArguments& args) {
+  if (args.scenario.empty() == args.model.empty()) {
+    throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
+  }
+  if (!args.baseline.empty() && !args.model.empty()) {
+    throw InputError("diagnose: --baseline calibrates a scenario: use it with --scenario, not --model");
+  }
+  if (args.recordings.empty()) {
+    throw InputError(args.baseline.empty()
+                         ? "diagnose: no recordings given (canalsim diagnose --scenario S REC.csv...)"
+                         : "diagnose: no recordings to diagnose after the baseline: end the --baseline list with -- "
+                           "(canalsim diagnose --scenario S --baseline B1.csv B2.csv -- R1.csv R2.csv) or put --baseline last");
+  }
+  check_outputs(args);
+  if (!args.model.empty()) return run_model(args);
+  const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  // One line for the first problem (it names the recording); the user reruns to see the next.
+  std::vector<Recording> recordings;
+  for (const Recording& r : read_all(args.recordings)) recordings.push_back(in_millimetres(r));
+  if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
+    throw InputError(problems.front() + " (scenario " + s.name + ")");
+  }
+
+  check_diagnosis_cost(s, recordings, args);
+  if (!args.baseline.empty()) return run_with_baseline(s, recordings, args);
+
+  diagnosis::DiagnoseOptions options = diagnose_options(args);
   ProgressLine progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + s.name);
   options.progress = progress.callback();
   const diagnosis::Diagnosis d = diagnosis::diagnose(s, recordings, options);
@@ -155,7 +205,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--upstream-level", args->upstream_level_mm,
                   "--model: constant upstream level in mm for recordings without y_up_mm")
       ->check(positive_number("a level in mm"));
-  cmd->add_option("recordings", args->recordings, "Recording CSV files")->required();
+  cmd->add_option("recordings", args->recordings, "Recording CSV files to diagnose");
+  cmd->add_option("--baseline", args->baseline,
+                  "--scenario: calibrate the scenario on these clean recordings first, then diagnose the others "
+                  "against it; ends at the next option or -- (--baseline B1.csv B2.csv -- R1.csv R2.csv)");
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
   cmd->add_option("--candidates", args->candidates, "Catalog effects to try (default: all)");

@@ -8,7 +8,9 @@
 #include <sstream>
 
 #include "calibration/replay.hpp"
+#include "core/declared_units.hpp"
 #include "core/parallel.hpp"
+#include "diagnosis/baseline.hpp"
 #include "diagnosis/scenario_engine.hpp"
 #include "reduced_models/metrics.hpp"
 
@@ -27,6 +29,11 @@ calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
   r.reconstruct_clock = o.reconstruct_clock;
   r.settle_time_s = o.settle_time_s;
   r.warmup_s = o.warmup_s;
+  // A replay driven by the recorded upstream level starts where that level starts (as the
+  // calibration's replay does): otherwise it would settle at the scenario's upstream level and
+  // jump to the recorded one at the first sample. The scenario's own upstream model keeps its
+  // level, so that a level-sensor offset stays a sensor effect.
+  r.start_at_recorded_level = o.use_recorded_upstream;
   return r;
 }
 
@@ -379,8 +386,13 @@ Status DiagnoseOptions::validate() const {
   return check.status();
 }
 
-Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings, const DiagnoseOptions& options) {
-  if (const Status status = options.validate(); !status) throw InputError("diagnose options: " + status.message());
+Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings_as_recorded,
+                   const DiagnoseOptions& given) {
+  if (const Status status = given.validate(); !status) throw InputError("diagnose options: " + status.message());
+  DiagnoseOptions options = given;
+  if (options.calibrated_std.empty()) options.calibrated_std = calibrated_std_of(scenario);
+  std::vector<Recording> recordings;
+  for (const Recording& r : recordings_as_recorded) recordings.push_back(in_millimetres(r));
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
   if (!problems.empty()) {
     std::string all;

@@ -58,10 +58,12 @@ struct DiagnoseOptions {
   // instead (command_switch_times), which removes the sampling jitter of the input.
   bool reconstruct_clock = true;
   double settle_time_s = 600.0;  // SimulateOptions::settle_time; >= 0
-  // Leading seconds of every recording left out of costs, tests and location: what happened
-  // before the recording started is unknown (the replay settles at the recording's
-  // operating_opening_mm metadata, or at its first command), so its first transient may differ.
-  double warmup_s = 10.0;        // [0, a third of the shortest recording]
+  // Leading seconds of every recording left out of costs, tests and location. None by default:
+  // the replay starts from the steady state of the recording's own initial state (its
+  // operating_opening_mm metadata or first command; with use_recorded_upstream also its first
+  // upstream level), so every sample after it is comparable — the first 10 s once dropped were a
+  // fifth of a short step test (issue 13). At most a third of a recording is dropped.
+  double warmup_s = 0.0;         // >= 0
   // What a calibration of the scenario left open (docs/calibration.md): calibration parameter name
   // (cd_free, cd_submerged, manning_n, downstream_opening_mm, offset_mm, offset_y_dwe_mm, ...) →
   // one standard deviation in its unit. An effect that moves a calibrated parameter is material
@@ -81,8 +83,12 @@ struct DiagnoseOptions {
 using calibration::command_switch_times;
 using calibration::check_recordings;
 
-// Runs the diagnosis. Throws InputError (all problems of check_recordings, or invalid options);
-// a simulation failure is returned as ok = false with the message.
+// Runs the diagnosis. Recordings in declared units (u_unit / u_scale_mm_per_unit, y_unit /
+// y_scale_mm_per_unit; docs/recording-format.md) are converted to millimetres first. Without
+// options.calibrated_std, the scenario's own [calibration.std] table (a file written by
+// `canalsim calibrate`) fills it. Throws InputError (all problems of check_recordings, a bad
+// declared unit, an unknown calibrated parameter, or invalid options); a simulation failure is
+// returned as ok = false with the message.
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
                    const DiagnoseOptions& options = {});
 

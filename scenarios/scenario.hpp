@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -168,6 +169,10 @@ struct Scenario {
   SensorSpec sensors;
   NumericsSpec numerics;
   std::vector<ExperimentSpec> experiments;
+  // [calibration.std]: what a calibration of this scenario left open, written by `canalsim
+  // calibrate` — calibration parameter name (cd_free, manning_n, offset_y_dwe_mm, ...) → one
+  // standard deviation in its unit. The diagnosis reads it as DiagnoseOptions::calibrated_std.
+  std::map<std::string, double> calibrated_std;
 
   const ExperimentSpec* find_experiment(const std::string& name) const;
 };

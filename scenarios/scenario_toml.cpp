@@ -1,5 +1,6 @@
 #include "scenarios/scenario_toml.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -217,6 +218,29 @@ ExperimentSpec read_experiment(TomlTable t, const Scenario& s) {
   return e;
 }
 
+namespace {
+
+// [calibration] as `canalsim calibrate` writes it: [calibration.std] maps calibration parameter
+// names to standard deviations. The names are the calibration catalog's (checked where the
+// catalog is known, diagnosis/baseline.hpp); here each must look like one and carry a number.
+std::map<std::string, double> read_calibration(TomlTable t) {
+  std::map<std::string, double> out;
+  if (t.has("std")) {
+    TomlTable st = t.table("std");
+    for (const std::string& name : st.keys()) {
+      const bool plausible = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.';
+      });
+      if (!plausible) st.fail(name, "expected a calibration parameter name (docs/calibration.md)");
+      out[name] = st.number(name, 0.0, {0.0, 1.0e6}, "(a standard deviation in the parameter's unit)");
+    }
+  }
+  t.reject_unknown_keys();
+  return out;
+}
+
+}  // namespace
+
 Scenario read_scenario(TomlTable root, const std::string& source) {
   Scenario s;
   s.source = source;
@@ -256,6 +280,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     n.reject_unknown_keys();
   }
   for (auto e : root.tables("experiments")) s.experiments.push_back(read_experiment(e, s));
+  if (root.has("calibration")) s.calibrated_std = read_calibration(root.table("calibration"));
   root.reject_unknown_keys();
   return s;
 }

@@ -207,6 +207,12 @@ std::vector<double> TomlTable::numbers(const std::string& key, Range range, cons
   return result;
 }
 
+std::vector<std::string> TomlTable::keys() const {
+  std::vector<std::string> out;
+  for (const auto& [key, node] : table_) out.emplace_back(key.str());
+  return out;
+}
+
 void TomlTable::reject_unknown_keys() const {
   for (const auto& [key, node] : table_) {
     const std::string name(key.str());

@@ -50,6 +50,9 @@ class TomlTable {
   std::vector<TomlTable> tables(const std::string& key);
   std::vector<double> numbers(const std::string& key, Range range, const std::string& unit);
 
+  // Every key of the table, in the file's order (for tables whose keys are names, not a schema).
+  std::vector<std::string> keys() const;
+
   // Throws InputError for every key that was present but never read.
   void reject_unknown_keys() const;
 

@@ -72,4 +72,84 @@ TEST(Diagnose, OutputsInAMissingDirectoryAreRefusedBeforeTheRecordingsAreRead) {
   fs::remove_all(scratch);
 }
 
+// A recording of `rows` samples every `period` s at a constant opening, with a `# scenario:` line.
+void write_flat_recording(const fs::path& file, double period, const std::string& canal, int rows = 60) {
+  std::ofstream out(file);
+  out << "# scenario: " << canal << "\nt_s,u_mm,y_dwe_mm\n";
+  for (int k = 0; k < rows; ++k) out << period * k << ",20," << 45 + 0.01 * (k % 7) << "\n";
+}
+
+TEST(Diagnose, ABaselineOfAnotherPeriodOrCanalIsOneLineNamingItAndWritesNothing) {
+  const fs::path scratch = scratch_dir("diagnose_baseline_bad");
+  write_flat_recording(scratch / "rec.csv", 0.13, "lab");
+  write_flat_recording(scratch / "base1.csv", 0.13, "lab");
+  write_flat_recording(scratch / "base3.csv", 0.26, "lab");
+  write_flat_recording(scratch / "other.csv", 0.13, "asce1");
+  std::ofstream(scratch / "d.json") << "an earlier result\n";
+  const std::size_t before = entry_count(scratch);
+  struct Case {
+    std::string args, says;
+  };
+  for (const Case& c :
+       {Case{"--baseline base1.csv base3.csv -- rec.csv", "base3.csv: sampled every 0.26 s, the recordings every 0.13 s"},
+        Case{"rec.csv --baseline base1.csv other.csv", "other.csv: recorded on canal 'asce1', the recordings on 'lab'"},
+        Case{"--baseline base1.csv rec.csv", "end the --baseline list with --"}}) {
+    const RunResult r = run_canalsim("diagnose --scenario lab " + c.args + " --json d.json --report d.html", scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << c.args << ": " << r.code << ": " << r.err;
+    EXPECT_NE(r.err.find("canalsim: error: " + c.says), std::string::npos) << r.err;
+    EXPECT_EQ(read_text(scratch / "d.json"), "an earlier result\n");
+    EXPECT_EQ(entry_count(scratch), before);
+  }
+  const RunResult model = run_canalsim("diagnose --model liom --baseline base1.csv -- rec.csv", scratch);
+  EXPECT_TRUE(is_one_error_line(model)) << model.err;
+  EXPECT_NE(model.err.find("use it with --scenario"), std::string::npos) << model.err;
+  fs::remove_all(scratch);
+}
+
+// The lab scenario with op3 shortened to 60 s, and a recording of it.
+fs::path short_lab_recording(const fs::path& scratch) {
+  std::string toml = run_canalsim("scenarios --show lab", scratch).out;
+  const std::string op3 = "name = \"op3\"\n";
+  toml.insert(toml.find(op3) + op3.size(), "duration_s = 60.0\n");
+  std::ofstream(scratch / "short.toml") << toml;
+  const RunResult sim = run_canalsim("simulate short.toml -e op3 -o op3.csv", scratch);
+  EXPECT_EQ(sim.code, 0) << sim.err;
+  return scratch / "op3.csv";
+}
+
+TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
+  const fs::path scratch = scratch_dir("diagnose_baseline_ok");
+  short_lab_recording(scratch);
+  RunResult r = run_canalsim("calibrate --scenario short.toml op3.csv -o cal.toml --params manning_n,offset_y_dwe_mm --starts 1",
+                             scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string cal = read_text(scratch / "cal.toml");
+  const auto table = cal.find("[calibration.std]");
+  ASSERT_NE(table, std::string::npos) << cal;
+  EXPECT_NE(cal.find("manning_n = ", table), std::string::npos) << cal;
+  EXPECT_NE(cal.find("offset_y_dwe_mm = ", table), std::string::npos) << cal;
+
+  r = run_canalsim("diagnose --scenario cal.toml op3.csv --candidates sensor_offset --json d.json", scratch);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(read_text(scratch / "d.json").find("\"verdict\""), std::string::npos);
+
+  // A name that is no parameter of the canal: one line naming the file and the key.
+  std::ofstream(scratch / "bad.toml") << cal << "cd_fre = 0.1\n";
+  r = run_canalsim("diagnose --scenario bad.toml op3.csv --candidates sensor_offset", scratch);
+  EXPECT_TRUE(is_one_error_line(r)) << r.err;
+  EXPECT_NE(r.err.find("bad.toml: calibration.std.cd_fre: not a calibration parameter of lab"), std::string::npos) << r.err;
+
+  r = run_canalsim("diagnose --scenario short.toml op3.csv --candidates sensor_offset --json b.json --baseline op3.csv", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("calibrated on 1 baseline recording(s): op3.csv"), std::string::npos) << r.out;
+  const std::string json = read_text(scratch / "b.json");
+  const auto baseline = json.find("\"baseline\": {");
+  ASSERT_NE(baseline, std::string::npos) << json;
+  for (const char* field : {"\"files\": [", "\"parameters\": [", "\"residual_before\"", "\"residual_after\"",
+                            "\"name\": \"cd_free\"", "\"std\""}) {
+    EXPECT_NE(json.find(field, baseline), std::string::npos) << field;
+  }
+  fs::remove_all(scratch);
+}
+
 }  // namespace

@@ -1,0 +1,190 @@
+#include "diagnosis/baseline.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "calibration/parameters.hpp"
+#include "core/declared_units.hpp"
+#include "core/errors.hpp"
+#include "core/format.hpp"
+
+namespace canalsim::diagnosis {
+namespace {
+
+// Share of the progress bar the calibration takes: it replays the baseline ~100 times (a few
+// Levenberg–Marquardt iterations with a finite-difference Jacobian each), about what the
+// diagnosis of as many recordings spends on its ten candidates.
+constexpr double kCalibrationShare = 0.5;
+
+std::string name_of(const Recording& r) { return r.source.empty() ? "recording" : r.source; }
+
+std::vector<Recording> in_millimetres(const std::vector<Recording>& recordings) {
+  std::vector<Recording> out;
+  out.reserve(recordings.size());
+  for (const Recording& r : recordings) out.push_back(canalsim::in_millimetres(r));
+  return out;
+}
+
+// The first of the problems as one line; the user fixes it and reruns to see the next.
+void throw_first(const std::vector<std::string>& problems, const std::string& context) {
+  if (!problems.empty()) throw InputError(problems.front() + context);
+}
+
+// The calibration of the baseline, replayed as the diagnosis replays (calibration/replay.hpp):
+// the same upstream drive, command timing and settling, so that what the calibration fits is the
+// model the diagnosis then compares with. Its comparison settings stay calibration's own: every
+// sample after the initial state, levels and flow (the gate position's simulated value is an
+// artefact between solver steps), steps ending at the command's switches.
+calibration::CalibrateOptions calibration_options(const BaselineOptions& o) {
+  calibration::CalibrateOptions c;
+  c.parameters = o.parameters;
+  c.starts = o.calibration_starts;
+  c.max_iterations = o.calibration_iterations;
+  c.threads = o.diagnosis.threads;
+  c.grid_check = o.grid_check;
+  const DiagnoseOptions& d = o.diagnosis;
+  c.replay.use_recorded_upstream = d.use_recorded_upstream;
+  c.replay.start_at_recorded_level = d.use_recorded_upstream;
+  c.replay.command_lead_samples = d.command_lead_samples;
+  c.replay.reconstruct_clock = d.reconstruct_clock;
+  c.replay.settle_time_s = d.settle_time_s;
+  if (o.progress) {
+    c.progress = [&o](const ProgressReport& r) {
+      o.progress({r.fraction < 0.0 ? -1.0 : kCalibrationShare * r.fraction, "calibrating on the baseline: " + r.message});
+    };
+  }
+  return c;
+}
+
+}  // namespace
+
+Status BaselineOptions::validate() const {
+  Validator check;
+  check.require(calibration_starts >= 1 && calibration_starts <= 10, "calibration_starts", calibration_starts, "1..10");
+  check.require(calibration_iterations >= 1 && calibration_iterations <= 500, "calibration_iterations",
+                calibration_iterations, "1..500");
+  check.nested("diagnosis", diagnosis.validate());
+  return check.status();
+}
+
+std::map<std::string, double> calibrated_std_of(const calibration::Calibration& c) {
+  std::map<std::string, double> out;
+  for (const auto& p : c.parameters) {
+    if (std::isfinite(p.std)) out[p.name] = p.std;
+  }
+  return out;
+}
+
+std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& s) {
+  if (s.calibrated_std.empty()) return {};
+  const std::vector<calibration::Parameter> catalog = calibration::parameter_catalog(s);
+  for (const auto& [name, sd] : s.calibrated_std) {
+    const bool known = std::any_of(catalog.begin(), catalog.end(), [&](const auto& p) { return p.name == name; });
+    if (!known) {
+      throw InputError(s.source + ": calibration.std." + name + ": not a calibration parameter of " + s.name +
+                       " (expected one of " + calibration::parameter_names(catalog) + ")");
+    }
+  }
+  return s.calibrated_std;
+}
+
+std::vector<std::string> check_baseline(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings) {
+  std::vector<std::string> problems;
+  if (baseline.empty()) problems.push_back("no baseline recordings given");
+  if (recordings.empty()) problems.push_back("no recordings given");
+  if (!problems.empty()) return problems;
+  const Recording& first = recordings.front();
+  const double h = first.sample_period();
+  const std::string canal = first.meta("scenario");
+  const auto differs = [](double a, double b) { return std::abs(a - b) > 0.01 * std::max(a, b); };
+  for (const Recording& r : recordings) {
+    if (differs(r.sample_period(), h)) {
+      problems.push_back(name_of(r) + ": sampled every " + format_g(r.sample_period()) + " s, " + name_of(first) +
+                         " every " + format_g(h) + " s");
+    }
+  }
+  for (const Recording& b : baseline) {
+    if (b.size() >= 2 && differs(b.sample_period(), h)) {
+      problems.push_back(name_of(b) + ": sampled every " + format_g(b.sample_period()) + " s, the recordings every " +
+                         format_g(h) + " s");
+    }
+    const std::string other = b.meta("scenario");
+    if (!other.empty() && !canal.empty() && other != canal) {
+      problems.push_back(name_of(b) + ": recorded on canal '" + other + "', the recordings on '" + canal +
+                         "' (# scenario: metadata)");
+    }
+  }
+  return problems;
+}
+
+std::string baseline_summary(const BaselineDiagnosis& r) {
+  const calibration::Calibration& c = r.calibration;
+  std::string out = "calibrated on " + std::to_string(r.baseline.size()) + " baseline recording(s):";
+  for (const auto& f : r.baseline) out += " " + f;
+  out += "\n";
+  std::size_t width = 10;
+  for (const auto& p : c.parameters) width = std::max(width, p.name.size() + 2);
+  for (const auto& p : c.parameters) {
+    std::string line = "  " + p.name + std::string(width - p.name.size(), ' ') + format_g(p.value, 5) + " ± " +
+                       (std::isfinite(p.std) ? format_g(p.std, 2) : "not determined") + " " + p.unit + "  (was " +
+                       format_g(p.start, 5) + ")" + (p.at_bound ? "  at a bound" : "");
+    out += line + "\n";
+  }
+  out += "  weighted residual per sample " + format_g(c.cost_before, 3) + " -> " + format_g(c.cost_after, 3) + ", " +
+         std::to_string(c.simulations) + " simulations, " + format_fixed(c.seconds, 1) + " s\n\n";
+  return out;
+}
+
+nlohmann::json baseline_json(const BaselineDiagnosis& r) {
+  using nlohmann::json;
+  const calibration::Calibration& c = r.calibration;
+  const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json parameters = json::array();
+  for (const auto& p : c.parameters) {
+    parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"value", number(p.value)}, {"std", number(p.std)},
+                          {"start", number(p.start)}, {"at_bound", p.at_bound}});
+  }
+  json fits = json::array();
+  for (const auto& f : c.fits) {
+    fits.push_back({{"recording", f.recording}, {"channel", f.channel}, {"rms_before", number(f.rms_before)},
+                    {"rms_after", number(f.rms_after)}});
+  }
+  json unidentified = json::array();
+  for (const auto& u : c.identifiability) unidentified.push_back({{"parameters", u.parameters}, {"reason", u.reason}});
+  return json{{"files", r.baseline},           {"parameters", parameters},
+              {"residual_before", number(c.cost_before)}, {"residual_after", number(c.cost_after)},
+              {"fits", fits},                  {"not_identifiable", unidentified},
+              {"simulations", c.simulations},  {"seconds", number(c.seconds)}};
+}
+
+BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline_in,
+                                         const std::vector<Recording>& recordings_in, const BaselineOptions& o) {
+  if (const Status status = o.validate(); !status) throw InputError("baseline diagnosis options: " + status.message());
+  const std::vector<Recording> baseline = in_millimetres(baseline_in);
+  const std::vector<Recording> recordings = in_millimetres(recordings_in);
+  throw_first(check_baseline(baseline, recordings), "");
+  throw_first(check_recordings(scenario, baseline), " (baseline; scenario " + scenario.name + ")");
+  throw_first(check_recordings(scenario, recordings), " (scenario " + scenario.name + ")");
+
+  BaselineDiagnosis out;
+  for (const Recording& b : baseline) out.baseline.push_back(name_of(b));
+  out.calibration = calibration::calibrate(scenario, baseline, {}, calibration_options(o));
+  out.calibration.series.clear();  // plots of the baseline belong to `canalsim calibrate --report`
+  if (!out.calibration.ok) {
+    out.diagnosis.ok = false;
+    out.diagnosis.message = "calibration on the baseline failed: " + out.calibration.message;
+    return out;
+  }
+  DiagnoseOptions d = o.diagnosis;
+  d.calibrated_std = calibrated_std_of(out.calibration);
+  d.progress = nullptr;
+  if (o.progress) {
+    d.progress = [&o](const ProgressReport& r) {
+      o.progress({r.fraction < 0.0 ? -1.0 : kCalibrationShare + (1.0 - kCalibrationShare) * r.fraction, r.message});
+    };
+  }
+  out.diagnosis = diagnose(out.calibration.calibrated, recordings, d);
+  return out;
+}
+
+}  // namespace canalsim::diagnosis

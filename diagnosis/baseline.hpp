@@ -1,0 +1,86 @@
+// Diagnosis against a calibrated baseline (issue 13): the workflow of a canal operator, who
+// calibrates the scenario once on clean baseline recordings and then diagnoses later recordings
+// against the calibrated scenario.
+//
+//   1. Check: baseline and recordings must be of the same canal and logger — one sampling period,
+//      the same `scenario` metadata where both carry it — and usable with the scenario
+//      (check_recordings). A problem is one InputError line naming the file and the difference.
+//   2. Calibrate the scenario on the baseline (calibration::calibrate, docs/calibration.md): the
+//      default parameter set (the laboratory's unknowns), replayed the way the diagnosis replays
+//      (the same upstream drive and command timing), without the grid check unless asked.
+//   3. Diagnose the recordings against the calibrated scenario (diagnose.hpp) with
+//      DiagnoseOptions::calibrated_std filled from the calibration's standard deviations: an
+//      effect that moves a calibrated parameter is material only beyond what the calibration
+//      left open.
+//
+//   BaselineOptions o;
+//   const BaselineDiagnosis r = diagnose_with_baseline(scenario, baseline, recordings, o);
+//   r.calibration.parameters   // calibrated values ± std
+//   r.diagnosis.verdict
+//
+// Recordings in declared units (u_unit / u_scale_mm_per_unit, y_unit / y_scale_mm_per_unit;
+// docs/recording-format.md) are converted to millimetres first.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "calibration/calibrate.hpp"
+#include "core/progress.hpp"
+#include "core/recording.hpp"
+#include "core/status.hpp"
+#include "diagnosis/diagnose.hpp"
+#include "scenarios/scenario.hpp"
+
+namespace canalsim::diagnosis {
+
+struct BaselineOptions {
+  // The diagnosis of the recordings; its calibrated_std is replaced by the calibration's and its
+  // progress by the one below.
+  DiagnoseOptions diagnosis;
+  // Calibration parameter specs (NAME or NAME:LOW:HIGH); empty = calibration's default set.
+  std::vector<std::string> parameters;
+  int calibration_starts = 1;      // Levenberg–Marquardt runs; 1..10 (the scenario's values first)
+  int calibration_iterations = 30; // per run; 1..500
+  bool grid_check = false;         // re-simulate the calibrated optimum on twice the cells
+  ProgressCallback progress;       // calibration, then diagnosis, as one share
+  Status validate() const;
+};
+
+struct BaselineDiagnosis {
+  calibration::Calibration calibration;   // of the baseline; its series are left empty
+  Diagnosis diagnosis;                     // of the recordings against calibration.calibrated
+  std::vector<std::string> baseline;       // the baseline recordings' names (their source)
+};
+
+// What a calibration left open, for DiagnoseOptions::calibrated_std: parameter name → one
+// standard deviation, for every parameter whose deviation the data determined (finite).
+std::map<std::string, double> calibrated_std_of(const calibration::Calibration& calibration);
+
+// The calibrated standard deviations a scenario file carries ([calibration.std], written by
+// `canalsim calibrate`), each name checked against the scenario's calibration parameters.
+// Throws InputError naming the file and the unknown name.
+std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& scenario);
+
+// Problems that make baseline and recordings incomparable, one line each naming the baseline
+// file: a sampling period other than the recordings' ("base3.csv: sampled every 0.26 s, the
+// recordings every 0.13 s"), another canal by the `scenario` metadata. Recordings of different
+// periods among themselves are named too. Empty when they match.
+std::vector<std::string> check_baseline(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings);
+
+// The calibration part of a result for people and programs: a short table (parameter, value ±
+// std, start, unit; the weighted residual before and after) and the JSON object `baseline`
+// (docs/diagnosis.md: files, parameters with value, std — null when not determined —, start,
+// unit and at_bound, residual_before/after, fits per recording and channel, simulations, seconds).
+std::string baseline_summary(const BaselineDiagnosis& result);
+nlohmann::json baseline_json(const BaselineDiagnosis& result);
+
+// Runs the three steps. Throws InputError (incompatible or unusable recordings, bad options);
+// a calibration that fails numerically is returned with diagnosis.ok = false and its message.
+BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline,
+                                         const std::vector<Recording>& recordings, const BaselineOptions& options = {});
+
+}  // namespace canalsim::diagnosis

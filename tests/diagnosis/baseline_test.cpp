@@ -1,0 +1,172 @@
+// Diagnosis against a calibrated baseline (diagnosis/baseline.hpp). The truth is the laboratory
+// canal simulated differently (testing/realistic.hpp: four times the cells, the other limiter and
+// Courant number) with its uncertain parameters off the scenario's values by the tolerances of
+// issue 13 (discharge coefficient, Manning n, downstream opening, a level offset). Clean baseline
+// recordings of that truth calibrate the scenario; the recordings to diagnose come from the same
+// truth, clean or with a concealed effect. Also: the [calibration.std] table that carries the
+// calibrated deviations from `canalsim calibrate` to `canalsim diagnose`, and the checks that
+// refuse a baseline of another logger or canal.
+#include "diagnosis/baseline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "calibration/scenario_file.hpp"
+#include "diagnosis/blindtest.hpp"
+#include "scenarios/builtin.hpp"
+#include "scenarios/scenario_toml.hpp"
+#include "scenarios/simulate.hpp"
+#include "testing/realistic.hpp"
+
+namespace canalsim::diagnosis {
+namespace {
+
+constexpr double kSettle = 150.0;
+
+// The laboratory as it "really" is: another discretisation, and parameters off the scenario's.
+scenarios::Scenario perturbed_truth() {
+  scenarios::Scenario s = testing::independent_truth(scenarios::builtin_scenario("lab"));
+  s.head_gate->discharge_coefficient *= 1.04;
+  s.pools.front().manning_n *= 1.2;
+  s.downstream.gate.opening_m += 0.8e-3;
+  s.sensors.offset_y_dwe_mm = 0.4;
+  return s;
+}
+
+std::vector<Recording> record(const std::vector<std::string>& experiments, const ConcealedEffect& effect,
+                              std::uint64_t seed, const std::string& prefix) {
+  const scenarios::Scenario truth = perturbed_truth();
+  std::vector<Recording> out;
+  for (const auto& name : experiments) {
+    scenarios::Scenario s = truth;
+    scenarios::ExperimentSpec e = *s.find_experiment(name);
+    e.duration_s = 120.0;
+    scenarios::SensorSpec sensors = s.sensors;
+    sensors.noise_std_mm = 0.05;
+    sensors.seed = seed++;
+    e.sensors = sensors;
+    conceal(effect, s, e, 0.0);
+    scenarios::SimulateOptions so;
+    so.settle_time = kSettle;
+    so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
+    Recording r = scenarios::simulate(s, e, so);
+    r.source = prefix + name + ".csv";
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+BaselineOptions fast_options() {
+  BaselineOptions o;
+  o.diagnosis.candidates = {"sensor_delay", "sensor_offset", "discharge_coefficient", "downstream_gate", "friction"};
+  o.diagnosis.settle_time_s = kSettle;
+  o.diagnosis.max_evaluations = 5;
+  return o;
+}
+
+TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFalseAlarm) {
+  const std::vector<Recording> baseline = record({"op1", "op3"}, {"none", 0.0}, 21, "base_");
+  const std::vector<Recording> clean = record({"op2", "op4"}, {"none", 0.0}, 31, "");
+  const std::vector<Recording> delayed = record({"op2", "op4"}, {"sensor_delay", 1.0}, 31, "");
+  const BaselineOptions o = fast_options();
+
+  // Against the scenario as given, the parameter mismatch alone looks like a fault.
+  const Diagnosis uncalibrated = diagnose(scenarios::builtin_scenario("lab"), clean, o.diagnosis);
+  ASSERT_TRUE(uncalibrated.ok) << uncalibrated.message;
+  EXPECT_NE(uncalibrated.verdict, "none") << "the test's truth must be off the scenario: " << uncalibrated.reason;
+
+  const BaselineDiagnosis r = diagnose_with_baseline(scenarios::builtin_scenario("lab"), baseline, clean, o);
+  ASSERT_TRUE(r.calibration.ok) << r.calibration.message;
+  ASSERT_TRUE(r.diagnosis.ok) << r.diagnosis.message;
+  EXPECT_LT(r.calibration.cost_after, 0.5 * r.calibration.cost_before);
+  EXPECT_EQ(r.baseline, (std::vector<std::string>{"base_op1.csv", "base_op3.csv"}));
+  EXPECT_EQ(r.diagnosis.verdict, "none") << r.diagnosis.reason;
+  EXPECT_LT(r.diagnosis.nominal_rms, uncalibrated.nominal_rms);
+  // What the calibration left open goes to the diagnosis: a deviation for every parameter.
+  const auto deviations = calibrated_std_of(r.calibration);
+  EXPECT_EQ(deviations.size(), r.calibration.parameters.size());
+  for (const auto& [name, sd] : deviations) EXPECT_GT(sd, 0.0) << name;
+
+  const BaselineDiagnosis d = diagnose_with_baseline(scenarios::builtin_scenario("lab"), baseline, delayed, o);
+  ASSERT_TRUE(d.diagnosis.ok) << d.diagnosis.message;
+  EXPECT_EQ(d.diagnosis.verdict, "sensor_delay") << d.diagnosis.reason;
+  EXPECT_LE(parameter_error({"sensor_delay", 1.0}, d.diagnosis.effects.front().parameter.value), 0.25);
+}
+
+TEST(Baseline, ABaselineOfAnotherLoggerOrCanalIsNamedWithTheDifference) {
+  Recording rec, base;
+  rec.source = "rec.csv";
+  base.source = "base3.csv";
+  std::vector<double> t13, t26, u;
+  for (int k = 0; k < 60; ++k) {
+    t13.push_back(0.13 * k);
+    t26.push_back(0.26 * k);
+    u.push_back(20.0);
+  }
+  rec.set_column("t_s", t13);
+  base.set_column("t_s", t26);
+  for (Recording* r : {&rec, &base}) {
+    r->set_column("u_mm", u);
+    r->set_column("y_dwe_mm", u);
+  }
+  auto problems = check_baseline({base}, {rec});
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems.front(), "base3.csv: sampled every 0.26 s, the recordings every 0.13 s");
+
+  base.set_column("t_s", t13);
+  base.set_meta("scenario", "asce1");
+  rec.set_meta("scenario", "lab");
+  problems = check_baseline({base}, {rec});
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems.front().find("base3.csv: recorded on canal 'asce1', the recordings on 'lab'"), std::string::npos)
+      << problems.front();
+  EXPECT_THROW(diagnose_with_baseline(scenarios::builtin_scenario("lab"), {base}, {rec}, fast_options()), InputError);
+  EXPECT_FALSE(check_baseline({}, {rec}).empty());
+}
+
+std::string lab_text() {
+  for (const auto& b : scenarios::builtin_scenarios()) {
+    if (b.name == "lab") return b.toml;
+  }
+  return "";
+}
+
+TEST(Baseline, TheCalibrationTableCarriesTheDeviationsAndIsCheckedLikeEveryKey) {
+  const std::string text = lab_text();
+  std::string calibrated = calibration::with_calibration_table(
+      text, {{"cd_free", 0.012}, {"manning_n", 4e-4}, {"offset_y_dwe_mm", 0.03}, {"cd_submerged", INFINITY}});
+  // Calibrated again: the new table replaces the old one.
+  calibrated = calibration::with_calibration_table(calibrated, {{"cd_free", 0.02}, {"manning_n.1", 5e-4}});
+  const scenarios::Scenario s = scenarios::parse_scenario(calibrated, "cal.toml");
+  EXPECT_EQ(s.calibrated_std, (std::map<std::string, double>{{"cd_free", 0.02}, {"manning_n.1", 5e-4}}));
+  EXPECT_EQ(s.name, "lab");
+
+  // manning_n.1 names a pool of a canal with several pools: not of the one-pool lab.
+  try {
+    calibrated_std_of(s);
+    ADD_FAILURE() << "an unknown parameter was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cal.toml: calibration.std.manning_n.1: not a calibration parameter of lab"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string one = calibration::with_calibration_table(text, {{"cd_free", 0.02}, {"manning_n", 5e-4}});
+  EXPECT_EQ(calibrated_std_of(scenarios::parse_scenario(one, "cal.toml")).at("manning_n"), 5e-4);
+
+  const auto refused = [&](const std::string& table, const std::string& expected) {
+    try {
+      scenarios::parse_scenario(text + "\n" + table, "cal.toml");
+      ADD_FAILURE() << table << ": accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  refused("[calibration.std]\ncd_free = -0.1\n", "calibration.std.cd_free = -0.1: expected a number in [0, 1e+06]");
+  refused("[calibration.std]\ncd_free = \"small\"\n", "calibration.std.cd_free is a string");
+  refused("[calibration]\nstdev = 1\n", "unknown key calibration.stdev");
+  refused("[calibration.std]\n\"Cd free\" = 0.1\n", "expected a calibration parameter name");
+}
+
+}  // namespace
+}  // namespace canalsim::diagnosis
