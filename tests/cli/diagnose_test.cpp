@@ -93,7 +93,7 @@ TEST(Diagnose, ABaselineOfAnotherPeriodOrCanalIsOneLineNamingItAndWritesNothing)
   for (const Case& c :
        {Case{"--baseline base1.csv base3.csv -- rec.csv", "base3.csv: sampled every 0.26 s, the recordings every 0.13 s"},
         Case{"rec.csv --baseline base1.csv other.csv", "other.csv: recorded on canal 'asce1', the recordings on 'lab'"},
-        Case{"--baseline base1.csv rec.csv", "end the --baseline list with --"}}) {
+        Case{"--baseline base1.csv rec.csv", "diagnose: no recordings to diagnose after the baseline: end the --baseline list with --"}}) {
     const RunResult r = run_canalsim("diagnose --scenario lab " + c.args + " --json d.json --report d.html", scratch);
     EXPECT_TRUE(is_one_error_line(r)) << c.args << ": " << r.code << ": " << r.err;
     EXPECT_NE(r.err.find("canalsim: error: " + c.says), std::string::npos) << r.err;
