@@ -14,6 +14,7 @@
 #include "calibration/scenario_file.hpp"
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "core/declared_units.hpp"
 #include "core/files.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
@@ -40,9 +41,10 @@ std::string scenario_text(const std::string& name_or_path) {
   return read_text_file(name_or_path, "scenario file");
 }
 
+// In millimetres: a command logged in counts (# u_unit, # u_scale_mm_per_unit) is converted here.
 std::vector<Recording> read_all(const std::vector<std::string>& files) {
   std::vector<Recording> out;
-  for (const auto& f : files) out.push_back(read_recording(f));
+  for (const auto& f : files) out.push_back(in_millimetres(read_recording(f)));
   return out;
 }
 

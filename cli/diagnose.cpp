@@ -48,9 +48,11 @@ struct DiagnoseArguments {
 
 // Stops at the first unreadable recording: its error names the file and line, and the next
 // file's problem (or a "no recordings" that only follows from the first) would be noise.
+// In millimetres: a command or levels logged in other units (# u_unit, # u_scale_mm_per_unit;
+// docs/recording-format.md) are converted here, so every check and fit sees mm.
 std::vector<Recording> read_all(const std::vector<std::string>& files) {
   std::vector<Recording> recordings;
-  for (const auto& file : files) recordings.push_back(read_recording(file));
+  for (const auto& file : files) recordings.push_back(in_millimetres(read_recording(file)));
   return recordings;
 }
 
@@ -173,8 +175,7 @@ int run(const DiagnoseArguments& args) {
   if (!args.model.empty()) return run_model(args);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   // One line for the first problem (it names the recording); the user reruns to see the next.
-  std::vector<Recording> recordings;
-  for (const Recording& r : read_all(args.recordings)) recordings.push_back(in_millimetres(r));
+  const std::vector<Recording> recordings = read_all(args.recordings);
   if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
   }

@@ -83,21 +83,29 @@ void BM_DiagnoseWithBaseline(benchmark::State& state) {
   const auto recordings = truth_recordings({"gate_leakage", 1.5}, 201);
   diagnosis::BaselineOptions options;
   options.diagnosis.threads = static_cast<int>(state.range(0));
+  options.calibration_iterations = static_cast<int>(state.range(1));
   std::string verdict;
-  double calibration_s = 0.0, diagnosis_s = 0.0;
+  double calibration_s = 0.0, diagnosis_s = 0.0, iterations = 0.0, simulations = 0.0, cost_ratio = 0.0;
   for (auto _ : state) {
     const auto r = diagnosis::diagnose_with_baseline(lab, baseline, recordings, options);
     verdict = r.diagnosis.verdict;
     calibration_s = r.calibration.seconds;
     diagnosis_s = r.diagnosis.seconds;
+    iterations = r.calibration.iterations;
+    simulations = r.calibration.simulations;
+    cost_ratio = r.calibration.cost_after / r.calibration.cost_before;
     benchmark::DoNotOptimize(r.diagnosis.effects.data());
   }
   state.counters["calibration_s"] = calibration_s;
   state.counters["diagnosis_s"] = diagnosis_s;
+  state.counters["lm_iterations"] = iterations;
+  state.counters["replays"] = simulations;
+  state.counters["cost_after_before"] = cost_ratio;
   state.SetLabel("verdict " + verdict);
 }
 
-BENCHMARK(BM_DiagnoseWithBaseline)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+// Arguments: threads, calibration iterations (Levenberg–Marquardt, per start).
+BENCHMARK(BM_DiagnoseWithBaseline)->Args({2, 30})->Args({2, 10})->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 }  // namespace
 
