@@ -102,7 +102,7 @@ int run_model(const DiagnoseArguments& args) {
 // effect (the progress budget of diagnosis::diagnose): its cost is that many runs of the
 // recording's length (scenarios/run_cost.hpp), refused above the same ceiling as one run.
 void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
-                          const DiagnoseArguments& args) {
+                          const std::vector<Recording>& baseline, const DiagnoseArguments& args) {
   if (args.allow_long) return;
   const double candidates = args.candidates.empty() ? 10.0 : static_cast<double>(args.candidates.size());
   double updates = 0.0;
@@ -111,6 +111,21 @@ void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Record
     replay.name = rec.source;
     replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
     updates += (1.0 + 5.0 * candidates) * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
+  }
+  // A calibration on a baseline replays each baseline recording about 100 times (ten
+  // Levenberg–Marquardt iterations with a finite-difference Jacobian; bench/README.md).
+  for (const Recording& rec : baseline) {
+    scenarios::ExperimentSpec replay;
+    replay.name = rec.source;
+    replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
+    const double cost = 100.0 * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
+    if (updates + cost > scenarios::kMaxCellUpdates) {
+      throw InputError("diagnose: calibrating on the baseline replays " + rec.source + " (" + format_g(rec.size(), 3) +
+                       " samples) about 100 times through " + s.name + ": with the diagnosis about " +
+                       format_g(updates + cost, 3) + " cell updates, expected at most " +
+                       format_g(scenarios::kMaxCellUpdates) + " (shorter recordings; or pass --allow-long)");
+    }
+    updates += cost;
   }
   if (updates > scenarios::kMaxCellUpdates) {
     throw InputError("diagnose: replaying " + std::to_string(recordings.size()) + " recording(s) of " +
@@ -142,6 +157,7 @@ int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>
   if (const auto problems = diagnosis::check_recordings(s, baseline); !problems.empty()) {
     throw InputError(problems.front() + " (baseline; scenario " + s.name + ")");
   }
+  check_diagnosis_cost(s, recordings, baseline, args);
   diagnosis::BaselineOptions options;
   options.diagnosis = diagnose_options(args);
   ProgressLine progress("calibrating " + s.name + " on " + std::to_string(baseline.size()) + " baseline recording(s), then diagnosing " +
@@ -180,8 +196,8 @@ int run(const DiagnoseArguments& args) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
   }
 
-  check_diagnosis_cost(s, recordings, args);
   if (!args.baseline.empty()) return run_with_baseline(s, recordings, args);
+  check_diagnosis_cost(s, recordings, {}, args);
 
   diagnosis::DiagnoseOptions options = diagnose_options(args);
   ProgressLine progress("diagnosing " + std::to_string(recordings.size()) + " recording(s) against " + s.name);
