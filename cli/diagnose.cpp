@@ -158,6 +158,7 @@ int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>
     throw InputError(problems.front() + " (baseline; scenario " + s.name + ")");
   }
   check_diagnosis_cost(s, recordings, baseline, args);
+  for (const auto& w : diagnosis::baseline_coverage(baseline, recordings)) std::cerr << "canalsim: warning: " << w << '\n';
   diagnosis::BaselineOptions options;
   options.diagnosis = diagnose_options(args);
   ProgressLine progress("calibrating " + s.name + " on " + std::to_string(baseline.size()) + " baseline recording(s), then diagnosing " +

@@ -158,6 +158,33 @@ nlohmann::json baseline_json(const BaselineDiagnosis& r) {
               {"simulations", c.simulations},  {"seconds", number(c.seconds)}};
 }
 
+std::vector<std::string> baseline_coverage(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings) {
+  const auto span = [](const Recording& r) {
+    const auto& u = r.column(columns::gate_command);
+    const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+    return std::pair<double, double>{*lo, *hi};
+  };
+  double lo = 1e300, hi = -1e300;
+  for (const Recording& b : baseline) {
+    if (!b.has(columns::gate_command) || b.size() == 0) continue;
+    const auto [l, h] = span(b);
+    lo = std::min(lo, l);
+    hi = std::max(hi, h);
+  }
+  std::vector<std::string> warnings;
+  if (lo > hi) return warnings;
+  constexpr double kTolerance_mm = 2.0;
+  for (const Recording& r : recordings) {
+    if (!r.has(columns::gate_command) || r.size() == 0) continue;
+    const auto [l, h] = span(r);
+    if (l < lo - kTolerance_mm || h > hi + kTolerance_mm) {
+      warnings.push_back(name_of(r) + ": gate command " + format_g(l, 4) + ".." + format_g(h, 4) + " mm, the baseline covered " +
+                         format_g(lo, 4) + ".." + format_g(hi, 4) + " mm: the calibration may not hold there");
+    }
+  }
+  return warnings;
+}
+
 BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline_in,
                                          const std::vector<Recording>& recordings_in, const BaselineOptions& o) {
   if (const Status status = o.validate(); !status) throw InputError("baseline diagnosis options: " + status.message());

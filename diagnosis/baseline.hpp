@@ -81,6 +81,12 @@ std::vector<std::string> check_baseline(const std::vector<Recording>& baseline, 
 std::string baseline_summary(const BaselineDiagnosis& result);
 nlohmann::json baseline_json(const BaselineDiagnosis& result);
 
+// Where the calibration may not hold, one warning line per recording: its gate command leaves
+// the span the baseline's commands covered by more than 2 mm ("rec3.csv: gate command 38..48 mm,
+// the baseline covered 10..20 mm: the calibration may not hold there") — a coefficient of the
+// free-flow law is not determined by a baseline that never ran free. Empty when covered.
+std::vector<std::string> baseline_coverage(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings);
+
 // Runs the three steps. Throws InputError (incompatible or unusable recordings, bad options);
 // a calibration that fails numerically is returned with diagnosis.ok = false and its message.
 BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline,

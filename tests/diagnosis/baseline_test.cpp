@@ -123,6 +123,16 @@ TEST(Baseline, ABaselineOfAnotherLoggerOrCanalIsNamedWithTheDifference) {
       << problems.front();
   EXPECT_THROW(diagnose_with_baseline(scenarios::builtin_scenario("lab"), {base}, {rec}, fast_options()), InputError);
   EXPECT_FALSE(check_baseline({}, {rec}).empty());
+
+  // A recording at another operating point than the baseline's: warned, not refused.
+  std::vector<double> u2(u.size(), 40.0);
+  u2[5] = 45.0;
+  rec.set_column("u_mm", u2);
+  const auto warnings = baseline_coverage({base}, {rec});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings.front(), "rec.csv: gate command 40..45 mm, the baseline covered 20..20 mm: the calibration may not hold there");
+  rec.set_column("u_mm", u);
+  EXPECT_TRUE(baseline_coverage({base}, {rec}).empty());
 }
 
 std::string lab_text() {
