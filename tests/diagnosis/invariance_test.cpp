@@ -5,6 +5,8 @@
 // other limiter and Courant number) with a concealed gate rate limit (paper eq. 16), and are
 // diagnosed both against the scenario (`diagnose --scenario`) and against a reduced model
 // (`diagnose --model`). Each variant must name the rate limit and estimate the same speed.
+// Without the unit conversion (core/declared_units.hpp) the scenario diagnosis refused the counts
+// recordings: a command of 115 counts is outside the lab gate's 0..50 mm.
 //
 // The PRBS clock is 2 s here, not the laboratory's 0.5 s: sampled every 0.52 s, a 0.5 s bit can
 // fall between two samples and the decimated command is then another signal (no tool can replay
@@ -13,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -32,8 +35,9 @@ constexpr double kCountsPerMm = 1.0 / 0.13;  // an encoder of 0.13 mm per count
 const ConcealedEffect kTruth{"gate_rate_limit", 3.0};  // mm/s
 
 // Laboratory experiments, 160 s with a 2 s PRBS clock, recorded by the independent truth with the
-// rate limit, level noise 0.05 mm and the lab's quantisation, and a gate-position channel.
-std::vector<Recording> truth_recordings(const std::vector<std::string>& experiments) {
+// rate limit, level noise 0.05 mm and the lab's quantisation; levels and command, and the gate
+// position when asked.
+std::vector<Recording> truth_recordings(const std::vector<std::string>& experiments, bool gate_position = false) {
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   std::vector<Recording> out;
   for (const std::string& name : experiments) {
@@ -51,7 +55,15 @@ std::vector<Recording> truth_recordings(const std::vector<std::string>& experime
     so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
     Recording r = scenarios::simulate(s, e, so);
     r.source = name + ".csv";
-    out.push_back(std::move(r));
+    // What a logger has: levels and the command (no flow or regime), the gate position if asked.
+    Recording logged;
+    logged.source = r.source;
+    logged.metadata = r.metadata;
+    for (const char* c : {columns::time, columns::gate_command, columns::upstream_level, columns::level_below_gate,
+                          columns::level_downstream_end, columns::gate_position}) {
+      if (c != columns::gate_position || gate_position) logged.set_column(c, r.column(c));
+    }
+    out.push_back(std::move(logged));
   }
   return out;
 }
@@ -96,8 +108,8 @@ struct Variant {
 
 // The scenario diagnosis takes op1 (submerged) and op3 (free); a reduced model, one parameter set
 // for every recording, takes two operating points of one regime, op1 and op2.
-std::vector<Variant> variants(const std::vector<std::string>& experiments) {
-  const std::vector<Recording> mm = truth_recordings(experiments);
+std::vector<Variant> variants(const std::vector<std::string>& experiments, bool gate_position = false) {
+  const std::vector<Recording> mm = truth_recordings(experiments, gate_position);
   return {{"mm", mm, 0.13}, {"counts", in_counts(mm), 0.13}, {"decimated by 4", decimated(mm), 0.52}};
 }
 
@@ -113,10 +125,14 @@ TEST(Invariance, DeclaredCountsAreConvertedToMillimetres) {
   EXPECT_THROW(in_millimetres(bad), InputError);
 }
 
-TEST(Invariance, ScenarioVerdictDoesNotDependOnUnitOrSamplingRate) {
+// With the gate position recorded the speed is read off it (within 25 % of the truth); from the
+// levels alone it is fitted through the uncalibrated scenario, whose other grid and limiter bias it
+// (measured 5.18 mm/s for 3): there the test asks only that the verdict and the estimate do not
+// change with the unit or the rate.
+void expect_scenario_invariance(bool gate_position) {
   std::vector<double> estimates;
-  for (const Variant& v : variants({"op1", "op3"})) {
-    SCOPED_TRACE(v.name);
+  for (const Variant& v : variants({"op1", "op3"}, gate_position)) {
+    SCOPED_TRACE(v.name + (gate_position ? ", gate position recorded" : ", levels only"));
     scenarios::Scenario lab = scenarios::builtin_scenario("lab");
     lab.sensors.period_s = v.period_s;  // the logger's period, as a user's scenario would state it
     DiagnoseOptions o;
@@ -126,12 +142,22 @@ TEST(Invariance, ScenarioVerdictDoesNotDependOnUnitOrSamplingRate) {
     ASSERT_TRUE(d.ok) << d.message;
     EXPECT_EQ(d.verdict, kTruth.effect) << d.reason;
     const EffectResult& e = effect(d, kTruth.effect);
-    EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
+    if (gate_position) {
+      EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
+    }
     estimates.push_back(e.parameter.value);
   }
   ASSERT_EQ(estimates.size(), 3u);
+  std::cout << "scenario, " << (gate_position ? "gate position recorded" : "levels only")
+            << ": gate speed [mm/s] from mm, counts, every fourth sample: " << estimates[0] << ", " << estimates[1]
+            << ", " << estimates[2] << " (concealed " << kTruth.value << ")\n";
   EXPECT_NEAR(estimates[1], estimates[0], 1e-3 * estimates[0]) << "mm and counts must give the same fit";
   EXPECT_NEAR(estimates[2], estimates[0], 0.15 * estimates[0]) << "every fourth sample";
+}
+
+TEST(Invariance, ScenarioVerdictDoesNotDependOnUnitOrSamplingRate) {
+  expect_scenario_invariance(true);
+  expect_scenario_invariance(false);
 }
 
 TEST(Invariance, ModelVerdictDoesNotDependOnUnitOrSamplingRate) {
@@ -150,6 +176,8 @@ TEST(Invariance, ModelVerdictDoesNotDependOnUnitOrSamplingRate) {
     estimates.push_back(e.parameter.value);
   }
   ASSERT_EQ(estimates.size(), 3u);
+  std::cout << "reduced model: gate speed [mm/s] from mm, counts, every fourth sample: " << estimates[0] << ", " << estimates[1]
+            << ", " << estimates[2] << " (concealed " << kTruth.value << ")\n";
   EXPECT_NEAR(estimates[1], estimates[0], 1e-3 * estimates[0]) << "mm and counts must give the same fit";
   EXPECT_NEAR(estimates[2], estimates[0], 0.15 * estimates[0]) << "every fourth sample";
 }
