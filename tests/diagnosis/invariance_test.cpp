@@ -125,10 +125,10 @@ TEST(Invariance, DeclaredCountsAreConvertedToMillimetres) {
   EXPECT_THROW(in_millimetres(bad), InputError);
 }
 
-// With the gate position recorded the speed is read off it (within 25 % of the truth); from the
-// levels alone it is fitted through the uncalibrated scenario, whose other grid and limiter bias it
-// (measured 5.18 mm/s for 3): there the test asks only that the verdict and the estimate do not
-// change with the unit or the rate.
+// With the gate position recorded the speed is read off it; from the levels alone it is fitted by
+// re-simulating, and the default 6 secant evaluations stop far from the optimum (measured
+// 5.18 mm/s for 3 here; 11.0 for 3 with the lab's 0.5 s clock, even on the scenario's own
+// simulation): 20 are given, which reach 3.0.
 void expect_scenario_invariance(bool gate_position) {
   std::vector<double> estimates;
   for (const Variant& v : variants({"op1", "op3"}, gate_position)) {
@@ -138,13 +138,12 @@ void expect_scenario_invariance(bool gate_position) {
     DiagnoseOptions o;
     o.candidates = {"gate_rate_limit", "sensor_delay", "discharge_coefficient", "sensor_offset"};
     o.settle_time_s = kSettle;
+    o.max_evaluations = 20;
     const Diagnosis d = diagnose(lab, v.recordings, o);
     ASSERT_TRUE(d.ok) << d.message;
     EXPECT_EQ(d.verdict, kTruth.effect) << d.reason;
     const EffectResult& e = effect(d, kTruth.effect);
-    if (gate_position) {
-      EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
-    }
+    EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
     estimates.push_back(e.parameter.value);
   }
   ASSERT_EQ(estimates.size(), 3u);
