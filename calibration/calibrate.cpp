@@ -248,20 +248,21 @@ ReplayOptions CalibrateOptions::default_replay() {
   return r;
 }
 
-std::string CalibrateOptions::validate() const {
-  std::ostringstream out;
-  if (starts < 1 || starts > 10) out << "starts = " << starts << ": expected 1..10";
-  else if (screened_points < 0 || screened_points > 1000) out << "screened_points = " << screened_points << ": expected 0..1000";
-  else if (max_iterations < 1 || max_iterations > 500) out << "max_iterations = " << max_iterations << ": expected 1..500";
-  else if (threads < 1 || threads > 64) out << "threads = " << threads << ": expected 1..64";
-  else if (!(replay.fit_fraction > 0.0 && replay.fit_fraction <= 1.0)) out << "replay.fit_fraction = " << replay.fit_fraction << ": expected (0, 1]";
-  else if (!(replay.warmup_s >= 0.0)) out << "replay.warmup_s = " << replay.warmup_s << ": expected >= 0";
-  return out.str();
+Status CalibrateOptions::validate() const {
+  return Validator()
+      .require(starts >= 1 && starts <= 10, "starts", starts, "1..10")
+      .require(screened_points >= 0 && screened_points <= 1000, "screened_points", screened_points, "0..1000")
+      .require(max_iterations >= 1 && max_iterations <= 500, "max_iterations", max_iterations, "1..500")
+      .require(threads >= 1 && threads <= 64, "threads", threads, "1..64")
+      .require(replay.fit_fraction > 0.0 && replay.fit_fraction <= 1.0, "replay.fit_fraction", replay.fit_fraction,
+               "(0, 1]")
+      .require(replay.warmup_s >= 0.0, "replay.warmup_s", replay.warmup_s, ">= 0")
+      .status();
 }
 
 Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& recordings,
                       const std::vector<Recording>& validation, const CalibrateOptions& o) {
-  if (const std::string problem = o.validate(); !problem.empty()) throw InputError("calibrate options: " + problem);
+  if (const Status status = o.validate(); !status) throw InputError("calibrate options: " + status.message());
   std::vector<Recording> all = recordings;
   all.insert(all.end(), validation.begin(), validation.end());
   std::vector<std::string> problems = check_recordings(scenario, all);

@@ -28,6 +28,7 @@
 #include "calibration/replay.hpp"
 #include "core/progress.hpp"
 #include "core/recording.hpp"
+#include "core/status.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::calibration {
@@ -44,7 +45,7 @@ struct CalibrateOptions {
   int threads = 2;           // simulations in parallel; 1..64
   bool grid_check = true;    // re-simulate the optimum with twice the cells
   ProgressCallback progress;
-  [[nodiscard]] std::string validate() const;
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
   static ReplayOptions default_replay();
 };
 

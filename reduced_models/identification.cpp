@@ -18,7 +18,7 @@ namespace detail {
 void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>& data,
                         const FitOptions& options) {
   if (data.empty()) throw InputError("fit: no recordings given");
-  if (const auto why = options.validate(); !why.empty()) throw InputError("fit options: " + why);
+  if (const Status status = options.validate(); !status) throw InputError("fit options: " + status.message());
   for (const auto* d : data) {
     if (uses_upstream_level(kind)) require_upstream_level(*d, model_name(kind));
     const auto& L = options.bounds.L;
@@ -316,46 +316,56 @@ const ParameterSpec& FitBounds::operator[](const std::string& name) const {
   throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
-std::string FitOptions::validate() const {
-  for (const char* name : kNames) {
-    const auto& s = bounds[name];
-    const std::string field = std::string("bounds.") + name;
-    const std::string n = name;
-    const bool upper_from_data = s.upper == kInf && (n == "T" || n == "T2" || n == "Tz" || n == "L");
-    if (!std::isfinite(s.lower) || (!std::isfinite(s.upper) && !upper_from_data)) {
-      return field + ": bounds must be finite (got [" + format_g(s.lower) + ", " + format_g(s.upper) + "])";
-    }
-    if (s.lower > s.upper) {
-      return field + ": lower " + format_g(s.lower) + " > upper " + format_g(s.upper) +
-             " excludes every model";
-    }
-    if (s.fixed && !s.initial) return field + ": fixed needs an initial value";
-    if (s.initial && !(*s.initial >= s.lower && *s.initial <= s.upper)) {
-      return field + ": initial value " + format_g(*s.initial) + " lies outside [" +
-             format_g(s.lower) + ", " + format_g(s.upper) + "] (not clipped; widen the bounds)";
-    }
-  }
-  if (bounds.T.upper < 0.0) return "bounds.T: upper " + format_g(bounds.T.upper) + " s < 0 excludes every model (T >= 0)";
-  if (bounds.T2.upper < 0.0) return "bounds.T2: upper " + format_g(bounds.T2.upper) + " s < 0 excludes every model (T2 >= 0)";
-  if (bounds.L.upper < 0.0) return "bounds.L: upper " + format_g(bounds.L.upper) + " s < 0 excludes every model (L >= 0)";
-  if (bounds.lambda.upper <= 0.0) {
-    return "bounds.lambda: upper " + format_g(bounds.lambda.upper) + " <= 0 excludes every model (lambda > 0)";
-  }
-  if (bounds.T.lower < 0.0) return "bounds.T: lower " + format_g(bounds.T.lower) + " s, expected >= 0";
-  if (bounds.T2.lower < 0.0) return "bounds.T2: lower " + format_g(bounds.T2.lower) + " s, expected >= 0";
-  if (bounds.Tz.lower < 0.0) return "bounds.Tz: lower " + format_g(bounds.Tz.lower) + " s, expected >= 0";
-  if (bounds.L.lower < 0.0) return "bounds.L: lower " + format_g(bounds.L.lower) + " s, expected >= 0";
-  if (bounds.lambda.lower <= 0.0) return "bounds.lambda: lower " + format_g(bounds.lambda.lower) + ", expected > 0";
-  if (!(relative_tolerance > 0.0)) return "relative_tolerance: expected > 0";
-  if (max_evaluations < 1) return "max_evaluations: expected >= 1";
-  if (restarts < 0) return "restarts: expected >= 0";
-  if (nonlinear_restarts < 0) return "nonlinear_restarts: expected >= 0";
-  if (hybrid_restarts < 0) return "hybrid_restarts: expected >= 0";
-  if (threads < 1) return "threads: expected >= 1";
-  if (!(head_ref_mm >= 0.0)) return "head_ref_mm: expected >= 0 (0 = mean head of the data)";
-  if (!(head_ref_sub_mm >= 0.0)) return "head_ref_sub_mm: expected >= 0";
-  if (const auto why = actuation.validate(); !why.empty()) return why;
-  return simulation.validate();
+namespace {
+
+// One parameter's bounds, field `name`: finite (an upper +inf of T, T2, Tz or L stands for "from
+// the data"), ordered, and holding the initial value (required when the parameter is fixed).
+Status validate_bounds(const std::string& name, const ParameterSpec& s) {
+  const bool upper_from_data = s.upper == kInf && (name == "T" || name == "T2" || name == "Tz" || name == "L");
+  std::string range = "[";  // built by appending: GCC 12 warns (-Wrestrict) on "[" + std::string&&
+  range += format_g(s.lower) + ", " + format_g(s.upper) + "]";
+  return Validator()
+      .require(std::isfinite(s.lower) && (std::isfinite(s.upper) || upper_from_data), name,
+               "bounds must be finite (got " + range + ")")
+      .require(s.lower <= s.upper, name,
+               "lower " + format_g(s.lower) + " > upper " + format_g(s.upper) + " excludes every model")
+      .require(!s.fixed || s.initial.has_value(), name, "fixed needs an initial value")
+      .require(!s.initial || (*s.initial >= s.lower && *s.initial <= s.upper), name,
+               "initial value " + format_g(s.initial.value_or(0.0)) + " lies outside " + range +
+                   " (not clipped; widen the bounds)")
+      .status();
+}
+
+}  // namespace
+
+Status FitOptions::validate() const {
+  Validator check;
+  for (const char* name : kNames) check.nested("bounds", validate_bounds(name, bounds[name]));
+  // Bounds that leave no admissible value (T, T2, Tz, L >= 0; lambda > 0).
+  check.require(bounds.T.upper >= 0.0, "bounds.T",
+                "upper " + format_g(bounds.T.upper) + " s < 0 excludes every model (T >= 0)");
+  check.require(bounds.T2.upper >= 0.0, "bounds.T2",
+                "upper " + format_g(bounds.T2.upper) + " s < 0 excludes every model (T2 >= 0)");
+  check.require(bounds.L.upper >= 0.0, "bounds.L",
+                "upper " + format_g(bounds.L.upper) + " s < 0 excludes every model (L >= 0)");
+  check.require(bounds.lambda.upper > 0.0, "bounds.lambda",
+                "upper " + format_g(bounds.lambda.upper) + " <= 0 excludes every model (lambda > 0)");
+  check.require(bounds.T.lower >= 0.0, "bounds.T.lower", bounds.T.lower, ">= 0 s")
+      .require(bounds.T2.lower >= 0.0, "bounds.T2.lower", bounds.T2.lower, ">= 0 s")
+      .require(bounds.Tz.lower >= 0.0, "bounds.Tz.lower", bounds.Tz.lower, ">= 0 s")
+      .require(bounds.L.lower >= 0.0, "bounds.L.lower", bounds.L.lower, ">= 0 s")
+      .require(bounds.lambda.lower > 0.0, "bounds.lambda.lower", bounds.lambda.lower, "> 0");
+  check.require(relative_tolerance > 0.0, "relative_tolerance", relative_tolerance, "> 0")
+      .require(max_evaluations >= 1, "max_evaluations", max_evaluations, ">= 1")
+      .require(restarts >= 0, "restarts", restarts, ">= 0")
+      .require(nonlinear_restarts >= 0, "nonlinear_restarts", nonlinear_restarts, ">= 0")
+      .require(hybrid_restarts >= 0, "hybrid_restarts", hybrid_restarts, ">= 0")
+      .require(threads >= 1, "threads", threads, ">= 1")
+      .require(head_ref_mm >= 0.0, "head_ref_mm", head_ref_mm, ">= 0 (0 = mean head of the data)")
+      .require(head_ref_sub_mm >= 0.0, "head_ref_sub_mm", head_ref_sub_mm, ">= 0")
+      .nested("actuation", actuation.validate())
+      .nested("simulation", simulation.validate());
+  return check.status();
 }
 
 double weighted_median(std::vector<double>& values, std::vector<double>& weights) {
@@ -405,7 +415,7 @@ FitResult fit_nominal(ModelKind kind, const std::vector<ExperimentData>& data,
 
 std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData>& data,
                                 const FitOptions& options) {
-  if (const auto why = options.validate(); !why.empty()) throw InputError("fit options: " + why);
+  if (const Status status = options.validate(); !status) throw InputError("fit options: " + status.message());
   std::vector<FitResult> results(data.size());
   std::mutex progress_mutex;  // the callback is called from one thread at a time
   std::size_t done = 0;

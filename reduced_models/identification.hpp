@@ -91,9 +91,8 @@ struct FitOptions {
   // Progress of fit_each() and gamma_sweep() (may be empty); called from one thread at a time.
   ProgressCallback progress;
 
-  // Empty when valid; otherwise one line naming the field (e.g. "bounds.T: lower 5 > upper 1
-  // excludes every model").
-  std::string validate() const;
+  // Ok, or one line naming the field (e.g. "bounds.T: lower 5 > upper 1 excludes every model").
+  [[nodiscard]] Status validate() const;
 };
 
 // Fit of one model to one or several recordings (several: a nominal model, IAE_c).
@@ -126,7 +125,7 @@ FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data
 struct GammaGrid {
   double first = 0.0, last = 10.0, step = 0.05;
   std::vector<double> values() const;
-  std::string validate() const;
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field ("step = 0: ...")
   // Parses "first:last:step" (e.g. "0:10:0.05"); throws InputError naming the text.
   static GammaGrid parse(const std::string& text);
 };

@@ -87,14 +87,12 @@ bool is_integrating(ModelKind kind) { return kind == ModelKind::id || kind == Mo
 bool uses_gamma(ModelKind kind) { return uses_upstream_level(kind); }
 bool is_linear_time_invariant(ModelKind kind) { return !uses_upstream_level(kind); }
 
-std::string Actuation::validate() const {
-  if (!(gate_speed_mm_s >= 0.0) || !std::isfinite(gate_speed_mm_s)) {
-    return "Actuation.gate_speed_mm_s: " + format_g(gate_speed_mm_s) + ", expected >= 0 (0 = off)";
-  }
-  if (!(quantum_mm >= 0.0) || !std::isfinite(quantum_mm)) {
-    return "Actuation.quantum_mm: " + format_g(quantum_mm) + ", expected >= 0 (0 = off)";
-  }
-  return "";
+Status Actuation::validate() const {
+  return Validator()
+      .require(gate_speed_mm_s >= 0.0 && std::isfinite(gate_speed_mm_s), "gate_speed_mm_s", gate_speed_mm_s,
+               ">= 0 (0 = off)")
+      .require(quantum_mm >= 0.0 && std::isfinite(quantum_mm), "quantum_mm", quantum_mm, ">= 0 (0 = off)")
+      .status();
 }
 
 std::vector<std::string> parameter_names(ModelKind kind) {
@@ -139,25 +137,22 @@ void set_parameter(ModelParameters& p, const std::string& name, double value) {
   else throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
-std::string validate(const Model& model) {
+Status validate(const Model& model) {
   const auto& p = model.p;
+  Validator check;
   for (const auto& name : parameter_names(model.kind)) {
-    if (!std::isfinite(get_parameter(p, name))) return "parameter " + name + " is not finite";
+    const double value = get_parameter(p, name);
+    check.require(std::isfinite(value), "p." + name, value, "a finite value");
   }
-  if (!(p.T >= 0.0)) return "parameter T: " + format_g(p.T) + " s, expected >= 0";
-  if (model.kind == ModelKind::sopd && !(p.T2 >= 0.0)) {
-    return "parameter T2: " + format_g(p.T2) + " s, expected >= 0";
-  }
-  if (is_fractional(model.kind) && !(p.lambda > 0.0)) {
-    return "parameter lambda: " + format_g(p.lambda) + ", expected > 0";
-  }
-  if (!(p.L >= 0.0)) return "parameter L: " + format_g(p.L) + " s, expected >= 0";
-  if (model.kind == ModelKind::idz && !(p.Tz >= 0.0)) {
-    return "parameter Tz: " + format_g(p.Tz) + " s, expected >= 0";
-  }
-  if (!(p.head_ref_mm >= 0.0)) return "parameter head_ref_mm: expected >= 0 (0 = from data)";
-  if (!(p.head_ref_sub_mm >= 0.0)) return "parameter head_ref_sub_mm: expected >= 0";
-  return model.actuation.validate();
+  return check.require(p.T >= 0.0, "p.T", p.T, ">= 0 s")
+      .require(model.kind != ModelKind::sopd || p.T2 >= 0.0, "p.T2", p.T2, ">= 0 s")
+      .require(!is_fractional(model.kind) || p.lambda > 0.0, "p.lambda", p.lambda, "> 0")
+      .require(p.L >= 0.0, "p.L", p.L, ">= 0 s")
+      .require(model.kind != ModelKind::idz || p.Tz >= 0.0, "p.Tz", p.Tz, ">= 0 s")
+      .require(p.head_ref_mm >= 0.0, "p.head_ref_mm", p.head_ref_mm, ">= 0 (0 = from data)")
+      .require(p.head_ref_sub_mm >= 0.0, "p.head_ref_sub_mm", p.head_ref_sub_mm, ">= 0")
+      .nested("actuation", model.actuation.validate())
+      .status();
 }
 
 double free_flow_limit_mm(double y_dwe_mm, double x_up_mm) { return laws::free_flow_limit_level(y_dwe_mm, x_up_mm); }
@@ -235,10 +230,12 @@ std::vector<double> delayed_input(const ExperimentData& data, const Actuation& a
 
 SimulationResult simulate(const Model& model_in, const ExperimentData& data,
                           const SimulationOptions& options) {
-  if (const auto why = validate(model_in); !why.empty()) {
-    throw std::invalid_argument("simulate " + model_name(model_in.kind) + ": " + why);
+  if (const Status status = validate(model_in); !status) {
+    throw std::invalid_argument("simulate " + model_name(model_in.kind) + ": " + status.message());
   }
-  if (const auto why = options.validate(); !why.empty()) throw std::invalid_argument(why);
+  if (const Status status = options.validate(); !status) {
+    throw std::invalid_argument("simulation options: " + status.message());
+  }
   Model model = model_in;
   const ModelKind kind = model.kind;
   if (uses_upstream_level(kind)) {

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "core/status.hpp"
 #include "reduced_models/data.hpp"
 #include "reduced_models/gl.hpp"
 
@@ -74,7 +75,7 @@ struct ModelParameters {
 struct Actuation {
   double gate_speed_mm_s = 0.0;  // v in eq. 16; 0 = the gate follows u instantly
   double quantum_mm = 0.0;       // r in eq. 17 (paper: 0.05 mm); 0 = no quantisation
-  std::string validate() const;
+  [[nodiscard]] Status validate() const;
 };
 
 struct Model {
@@ -89,8 +90,8 @@ std::vector<std::string> parameter_names(ModelKind kind);
 double get_parameter(const ModelParameters& p, const std::string& name);
 void set_parameter(ModelParameters& p, const std::string& name, double value);
 
-// Empty when the parameters are usable for `kind`, else one line naming the field.
-std::string validate(const Model& model);
+// Ok when the parameters are usable for `kind`, else one line naming the field ("p.L = -1: ...").
+[[nodiscard]] Status validate(const Model& model);
 
 // Flow regime test of the paper: free when y_up > 0.81 y_dwe (y_dwe / x_up)^0.72 (eq. 8),
 // submerged otherwise (eq. 10; y_up ≤ y_dwe is reported as submerged too).
@@ -110,7 +111,7 @@ double paper_gain(const Model& model);
 
 struct SimulationOptions {
   GlOptions gl;  // short memory with N = 500 by default, as in the paper
-  std::string validate() const { return gl.validate(); }
+  [[nodiscard]] Status validate() const { return Validator().nested("gl", gl.validate()).status(); }
 };
 
 struct SimulationResult {

@@ -193,13 +193,13 @@ TEST(Hybrid, SwitchesBetweenTheFreeAndSubmergedTermsByTheFlowCondition) {
 TEST(ModelValidation, NamesTheOffendingParameter) {
   Model m{ModelKind::lfom, {}, {}};
   m.p.lambda = -0.5;
-  EXPECT_NE(validate(m).find("lambda"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("lambda"), std::string::npos);
   m.p.lambda = 0.5;
   m.p.L = -1.0;
-  EXPECT_NE(validate(m).find("parameter L"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("p.L"), std::string::npos);
   m.p.L = 0.0;
   m.actuation.quantum_mm = -0.05;
-  EXPECT_NE(validate(m).find("quantum_mm"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("quantum_mm"), std::string::npos);
 }
 
 }  // namespace
