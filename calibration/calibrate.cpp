@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numeric>
+#include <set>
 #include <sstream>
 
 #include "calibration/problem.hpp"
@@ -98,6 +101,10 @@ Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, const Cal
   so.function_tolerance = 1e-6;
   so.parameter_tolerance = 1e-5;
   so.gradient_tolerance = 1e-10;
+  // No projected line search on the bounds: Ceres would evaluate the Jacobian (a simulation per
+  // hydraulic parameter and recording) at every line-search point as well, which more than
+  // doubled the simulations; the bounds still hold, the step being projected onto them.
+  so.max_num_line_search_step_size_iterations = 0;
   IterationProgress progress(o.progress, run, runs, o.max_iterations);
   so.callbacks.push_back(&progress);
   ceres::Solver::Summary summary;
@@ -163,20 +170,14 @@ void add_fits(const ReplayProblem& problem, const std::vector<Channels>& before,
   }
 }
 
-// The optimum re-simulated on a grid with `factor` times the cells of every pool.
-// `shift`: how far the optimum moves (search coordinates) with the finer grid's residuals.
-GridCheck grid_check(ReplayProblem& problem, const std::vector<double>& z, const std::vector<Channels>& at_optimum,
-                     double cost, const std::vector<double>& J, const std::vector<double>& r, std::vector<double>& shift) {
+// The optimum re-simulated on a grid with `factor` times the cells of every pool (`fine`, the
+// first prediction of the re-estimate on twice the cells): how much the levels and the cost move.
+GridCheck grid_check(const ReplayProblem& problem, const std::vector<Channels>& fine,
+                     const std::vector<Channels>& at_optimum, double cost) {
   GridCheck g;
-  Scenario refined = problem.scenario_at(z);
-  for (auto& pool : refined.pools) pool.cells *= g.factor;
-  const std::vector<Channels> fine = problem.predict(refined);
   g.done = true;
   g.cost = cost;
-  std::vector<double> residual_change = problem.residuals(fine);
-  g.refined_cost = cost_per_sample(residual_change);
-  for (std::size_t k = 0; k < residual_change.size(); ++k) residual_change[k] -= r[k];
-  shift = optimum_shift(J, residual_change, problem.parameters().size());
+  g.refined_cost = cost_per_sample(problem.residuals(fine));
   double change = 0.0, residual = 0.0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < fine.size(); ++i) {
@@ -232,6 +233,39 @@ std::vector<std::string> other_canal_problems(const Scenario& s, const std::vect
   return problems;
 }
 
+// Simulation warnings (a failed steady state, scenarios/simulate.hpp) passed on once per
+// recording — to the caller's ReplayOptions::warning, else to stderr — and kept for the result:
+// a calibration simulates every recording hundreds of times, and the same warning each time
+// would bury the terminal. Called from the parallel simulations.
+class WarningOncePerRecording {
+ public:
+  explicit WarningOncePerRecording(std::function<void(const std::string&)> sink) : sink_(std::move(sink)) {}
+  void operator()(const std::string& message) {
+    // "<scenario>: experiment <recording>: the steady state (Newton) failed (...)": one per recording.
+    const std::string recording = message.substr(0, message.find(": the "));
+    {
+      const std::lock_guard lock(mutex_);
+      if (!seen_.insert(recording).second) return;
+      kept_.push_back(message);
+    }
+    if (sink_) {
+      sink_(message);
+    } else {
+      std::fprintf(stderr, "canalsim: warning: %s\n", message.c_str());
+    }
+  }
+  std::vector<std::string> kept() {
+    const std::lock_guard lock(mutex_);
+    return kept_;
+  }
+
+ private:
+  std::function<void(const std::string&)> sink_;
+  std::mutex mutex_;
+  std::set<std::string> seen_;
+  std::vector<std::string> kept_;
+};
+
 }  // namespace
 
 ReplayOptions CalibrateOptions::default_replay() {
@@ -286,7 +320,8 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
   if (speed && std::find(replay.channels.begin(), replay.channels.end(), columns::gate_position) == replay.channels.end()) {
     replay.channels.push_back(columns::gate_position);
   }
-  std::vector<std::string> warnings;
+  WarningOncePerRecording warn_once(o.replay.warning);
+  replay.warning = [&warn_once](const std::string& message) { warn_once(message); };
   ReplayProblem fit(scenario, parameters, recordings, replay, o.threads);
   c.samples = fit.residual_count();
   if (o.progress) o.progress({0.0, "nominal replay of " + std::to_string(recordings.size()) + " recording(s)"});
@@ -318,16 +353,18 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     c.inflation = stats.inflation;
     c.correlation = stats.correlation;
     for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
-    std::vector<double> shift(parameters.size(), 0.0);
+    // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
+    std::vector<double> numerical(parameters.size(), 0.0);
     if (o.grid_check) {
-      if (o.progress) o.progress({0.92, "grid check: twice the cells"});
-      c.grid = grid_check(fit, best.z, optimum, c.cost_after, J, r, shift);
+      if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
+      c.discretisation = discretisation_shifts(fit, best.z, J);
+      numerical = numerical_uncertainty(c.discretisation, parameters.size());
+      c.grid = grid_check(fit, c.discretisation.front().at_optimum, optimum, c.cost_after);
     }
     for (std::size_t j = 0; j < parameters.size(); ++j) {
       const Parameter& p = parameters[j];
       const double value = p.from_search(best.z[j]);
-      // The grid's shift in parameter units (delta method for log parameters).
-      const double grid = p.transform == Transform::log ? value * std::abs(shift[j]) : std::abs(shift[j]);
+      const double grid = numerical[j];
       ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), value,
                           std::sqrt(stats.std[j] * stats.std[j] + grid * grid), stats.std[j], grid,
                           p.low, p.high, false, stats.sensitivity[j]};
@@ -350,6 +387,7 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     c.message = e.what();
   }
   c.simulations += fit.simulations();
+  c.warnings = warn_once.kept();
   c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (o.progress) o.progress({1.0, "done"});
   return c;

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/discretisation.hpp"
 #include "calibration/parameters.hpp"
 #include "calibration/replay.hpp"
 #include "core/progress.hpp"
@@ -101,6 +102,9 @@ struct Calibration {
   std::vector<Identifiability> identifiability;
   std::vector<ChannelFit> fits;
   GridCheck grid;
+  // The optimum re-estimated on other numerics (twice the cells, the other limiter, half the
+  // Courant number; discretisation.hpp); empty without the grid check.
+  std::vector<DiscretisationShift> discretisation;
   std::vector<Series> series;
   double cost_before = 0.0, cost_after = 0.0;   // weighted cost per sample (fitted recordings)
   double inflation = 1.0;    // N / N_eff of the residuals at the optimum
@@ -108,6 +112,10 @@ struct Calibration {
   int simulations = 0, iterations = 0, starts = 0;
   double seconds = 0.0;
   std::string solver_report; // Ceres' one-line summary of the best run
+  // The simulations' warnings, the first per recording (a failed steady state: the replay then
+  // starts from time marching, and the warning names that state). Each was also passed to
+  // options.replay.warning, or printed on stderr when it is unset.
+  std::vector<std::string> warnings;
   scenarios::Scenario calibrated;
 };
 
