@@ -77,6 +77,7 @@ std::string text_summary(const Calibration& c) {
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
+  if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
   return out.str();
 }
 
@@ -126,6 +127,7 @@ nlohmann::json to_json(const Calibration& c) {
   j["samples"] = c.samples;
   j["simulations"] = c.simulations;
   j["starts"] = c.starts;
+  j["starts_note"] = c.starts_note;
   j["iterations"] = c.iterations;
   j["seconds"] = c.seconds;
   j["solver"] = c.solver_report;

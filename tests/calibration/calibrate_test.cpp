@@ -229,6 +229,26 @@ TEST(Calibrate, AFailedSteadyStateWarnsOnStderrWhenNoOneListens) {
   expect_names_the_failed_steady_state(err);
 }
 
+TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
+  // Held at a bound (the free-flow recordings want Cd free near 0.9): doubtful, so the second
+  // start runs; without a doubt (the six-parameter fit of the four recordings, which converges
+  // inside its bounds, identifiable, at a cost of 0.04) it does not.
+  CalibrateOptions o;
+  o.parameters = {"cd_free:1:1.2", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.starts = 2;
+  o.grid_check = false;
+  const std::vector<Recording> recs(truth_recordings().begin() + 2, truth_recordings().end());
+  const Calibration held = calibrate(model(), recs, {}, o);
+  ASSERT_TRUE(held.ok) << held.message;
+  EXPECT_EQ(held.starts, 2);
+  EXPECT_NE(held.starts_note.find("cd_free ended at a bound"), std::string::npos) << held.starts_note;
+  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  const Calibration free = calibrate(model(), truth_recordings(), {}, o);
+  ASSERT_TRUE(free.ok) << free.message;
+  EXPECT_EQ(free.starts, 1) << free.starts_note;
+  EXPECT_NE(free.starts_note.find("one start"), std::string::npos) << free.starts_note;
+}
+
 TEST(Calibrate, BadInputIsOneLineNamingWhatIsWrong) {
   CalibrateOptions o;
   o.parameters = {"cd_fre"};
