@@ -44,8 +44,8 @@ struct CalibrateOptions {
   ReplayOptions replay = default_replay();
   int starts = 2;            // Levenberg–Marquardt runs at most (the scenario's values first); 1..10
   // Run the further starts only when the first optimum is doubtful: not converged, at a bound,
-  // not identifiable, or a weighted cost per sample above 0.05 (Calibration::starts_note says
-  // which). Off: always run them.
+  // a weighted cost per sample above 0.05, a parameter not determined or with a relative std
+  // above 50 % (Calibration::starts_note says which). Off: always run them.
   bool further_starts_only_when_doubtful = true;
   int screened_points = 6;   // points spread over the bounds whose cost picks the other starts; >= 0
   int max_iterations = 30;   // per run; 1..500

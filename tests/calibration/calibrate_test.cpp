@@ -232,7 +232,7 @@ TEST(Calibrate, AFailedSteadyStateWarnsOnStderrWhenNoOneListens) {
 TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
   // Held at a bound (the free-flow recordings want Cd free near 0.9): doubtful, so the second
   // start runs; without a doubt (the six-parameter fit of the four recordings, which converges
-  // inside its bounds, identifiable, at a cost of 0.04) it does not.
+  // inside its bounds, every parameter determined, at a cost of 0.04) it does not.
   CalibrateOptions o;
   o.parameters = {"cd_free:1:1.2", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
   o.starts = 2;
