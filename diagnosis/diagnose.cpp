@@ -366,6 +366,10 @@ Status DiagnoseOptions::validate() const {
                 command_lead_samples, "[0, 1]");
   check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");
   check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.require(calibrated_z > 0.0, "calibrated_z", calibrated_z, "> 0");
+  for (const auto& [name, sd] : calibrated_std) {
+    check.require(sd >= 0.0, "calibrated_std." + name, sd, ">= 0 (a standard deviation)");
+  }
   check.nested("tests", tests.validate());
   check.nested("locate", locate.validate());
   for (const auto& c : candidates) {
