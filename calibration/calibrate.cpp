@@ -386,7 +386,7 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
       if (!o.further_starts_only_when_doubtful || !why.empty()) {
         c.starts_note = why.empty() ? "every start run (further_starts_only_when_doubtful off)"
                                     : "further starts run: " + why;
-        if (o.progress) o.progress({0.45, "screening " + std::to_string(o.screened_points) + " points over the bounds"});
+        if (o.progress) o.progress({0.5, "screening " + std::to_string(o.screened_points) + " points over the bounds"});
         std::vector<Run> screened = screened_starts(fit, o.screened_points);
         for (std::size_t k = 0; k < screened.size() && static_cast<int>(starts.size()) < o.starts; ++k) starts.push_back(screened[k]);
       } else {
