@@ -423,6 +423,7 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
       c.discretisation = discretisation_shifts(fit, best.z, J);
       numerical = numerical_uncertainty(c.discretisation, parameters.size());
       c.grid = grid_check(fit, c.discretisation.front().at_optimum, optimum, c.cost_after);
+      for (auto& d : c.discretisation) d.at_optimum.clear();  // the result stays light (diagnosis keeps dozens)
     }
     for (std::size_t j = 0; j < parameters.size(); ++j) {
       const Parameter& p = parameters[j];

@@ -35,7 +35,8 @@ struct DiscretisationShift {
   double weight = 1.0;         // factor on the move in the uncertainty (Richardson: 2 for the cells)
   std::vector<double> shift;   // θ_alternative − θ per parameter, parameter units
   double cost = 0.0;           // weighted cost per sample of the alternative at the optimum
-  std::vector<Channels> at_optimum;   // the alternative's prediction at the optimum (grid check)
+  // The alternative's prediction at the optimum, for the grid check (calibrate() clears it).
+  std::vector<Channels> at_optimum;
 };
 
 // `z`: the optimum (search coordinates), `jacobian`: row-major N × p at z. `iterations` >= 1:
