@@ -13,6 +13,7 @@
 #include <random>
 
 #include "reduced_models/frequency.hpp"
+#include "tests/reduced_models/crb.hpp"
 #include "reduced_models/identification.hpp"
 #include "testing/synthetic.hpp"
 
@@ -28,18 +29,19 @@ struct StepTest {
 // resolution 0.1 mm on a grid offset by 0.037 mm (a sensor zero that is not a multiple of the
 // resolution), long enough to settle (five time constants after the delay).
 Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
-  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037;
+  const double u0 = 20.0, A = 5.0, y0 = 45.0, offset = 0.037;
+  const double r = std::getenv("NOQ") ? 0.0 : 0.1;
   const double t_step = static_cast<double>(s.step_sample) * s.h;
   const auto n = static_cast<std::size_t>(std::ceil((t_step + s.L + 5.0 * s.T + 5.0) / s.h));
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 0.03);
+  std::normal_distribution<double> noise(0.0, r > 0 ? 0.03 : std::sqrt(0.03*0.03+0.01/12));
   std::vector<double> t(n), u(n), y(n);
   for (std::size_t k = 0; k < n; ++k) {
     t[k] = static_cast<double>(k) * s.h;
     u[k] = k >= s.step_sample ? u0 + A : u0;
     const double since = t[k] - t_step - s.L;
     const double level = y0 + (since > 0.0 ? s.K * A * (1.0 - std::exp(-since / s.T)) : 0.0);
-    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
+    y[k] = r > 0 ? r * std::round((level + noise(rng) - offset) / r) + offset : level + noise(rng);
   }
   Recording rec;
   rec.source = "fopdt.csv";
@@ -68,6 +70,45 @@ void expect_fopdt_recovered(const StepTest& s) {
   EXPECT_GT(r.nrmse.front(), 90.0);
 }
 
+// Exploration: the CRB of L and the fit's error.
+TEST(DelayPrecision, Explore) {
+  const int seeds = std::getenv("SEEDS") ? std::atoi(std::getenv("SEEDS")) : 1;
+  for (const double h : {0.125, 0.01}) {
+    for (const double T : {2.0, 20.0, 60.0, 300.0}) {
+      for (const double L : {0.5, 3.0, 12.0}) {
+        const StepTest s{2.0, T, L, h};
+        testing_crb::FopdtExperiment e{s.K, s.T, s.L};
+        e.h = h;
+        e.t_step = static_cast<double>(s.step_sample) * h;
+        e.n = static_cast<std::size_t>(std::ceil((e.t_step + s.L + 5.0 * s.T + 5.0) / s.h));
+        if (std::getenv("NOQ")) { e.quantum = 0; e.sigma = std::sqrt(0.03*0.03+0.01/12); }
+        const auto c3 = testing_crb::crb_std(e, false), c4 = testing_crb::crb_std(e, true);
+        double sum = 0, sum2 = 0, worst = 0, sy0 = 0;
+        for (int seed = 0; seed < seeds; ++seed) {
+          const auto data = prepare_data(fopdt_step_recording(s, 3 + seed));
+          FitOptions o;
+          if (std::getenv("LS")) o.criterion = Criterion::least_squares;
+          const auto r = fit(ModelKind::liom, data, o);
+          const double dL = r.model.p.L - L;
+          sum += dL; sum2 += dL * dL; worst = std::max(worst, std::abs(dL));
+          sy0 += (r.y0_mm.front() - 45.0) * (r.y0_mm.front() - 45.0);
+          if (std::getenv("CHK")) {
+            Model truth{ModelKind::liom, {}, {}};
+            testing::set_parameters(truth, {{"K", s.K}, {"T", s.T}, {"L", s.L}});
+            auto d2 = data; d2.y0_mm = 45.0;
+            double sse_t = 0, sse_f = 0;
+            auto yt = simulate(truth, d2).y_dwe_mm; 
+            for (std::size_t k = 0; k < yt.size(); ++k) { sse_t += std::pow(yt[k]-data.y_dwe_mm[k],2); sse_f += std::pow(r.response[0][k]-data.y_dwe_mm[k],2);}
+            std::printf("   seed %d dL %+.4f sse fit %.6f truth %.6f (h-scaled cost %.6f)\n", seed, dL, sse_f, sse_t, r.cost_total);
+          }
+        }
+        std::printf("h %.3f T %5.0f L %4.1f | crbL3 %.4f crbL4 %.4f | 2h %.3f | mean dL %+.4f rms dL %.4f worst %.4f rms y0 err %.4f\n", h, T, L,
+                    c3(2), c4(2), 2*h, sum/seeds, std::sqrt(sum2/seeds), worst, std::sqrt(sy0/seeds));
+      }
+    }
+  }
+}
+
 TEST(TimeScale, FopdtStepResponsesAreRecoveredAtAQuarterSecondSampling) {
   for (const StepTest s : {StepTest{2.0, 2.0, 1.5, 0.125}, StepTest{2.0, 2.0, 12.0, 0.125},
                            StepTest{2.0, 20.0, 1.5, 0.125}, StepTest{0.7, 20.0, 0.5, 0.125},
@@ -82,6 +123,75 @@ TEST(TimeScale, FopdtStepResponsesAreRecoveredAtTenMillisecondSampling) {
                            StepTest{2.0, 60.0, 0.5, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01}}) {
     expect_fopdt_recovered(s);
   }
+}
+
+// ---- Delay precision: the Cramér–Rao bound (crb.hpp) and the least-squares polish ----------
+
+// The bound on the delay of the recording fopdt_step_recording(s) makes, with the operating
+// point y0 estimated jointly with K, T and L (prepare_data takes y0 from the samples before the
+// step: no estimator knows it).
+double delay_bound(const StepTest& s) {
+  testing_crb::FopdtExperiment e{s.K, s.T, s.L};
+  e.h = s.h;
+  e.t_step = static_cast<double>(s.step_sample) * s.h;
+  e.n = fopdt_step_recording(s).column("t_s").size();
+  return testing_crb::crb_std(e, true)(2);
+}
+
+// L within two samples where the bound allows it (two samples ≥ 3 bound std), else within
+// 3 bound std; K and T within 5 %.
+void expect_delay_at_the_bound(const StepTest& s) {
+  const double bound = delay_bound(s), tolerance = std::max(2.0 * s.h, 3.0 * bound);
+  SCOPED_TRACE("T " + std::to_string(s.T) + " s, L " + std::to_string(s.L) + " s, h " + std::to_string(s.h) +
+               " s: CRB std of L " + std::to_string(bound) + " s");
+  FitOptions o;
+  o.criterion = Criterion::least_squares;
+  const auto r = fit(ModelKind::liom, prepare_data(fopdt_step_recording(s)), o);
+  EXPECT_NEAR(r.model.p.K, s.K, 0.05 * s.K);
+  EXPECT_NEAR(r.model.p.T, s.T, 0.05 * s.T);
+  EXPECT_NEAR(r.model.p.L, s.L, tolerance);
+}
+
+// Where two samples are at least three bound std, L is recovered within two samples: every
+// case at 0.125 s up to T = 60 s, at 0.01 s the fast pools and T = 20 s with L ≥ 3 s.
+TEST(DelayPrecision, TheDelayIsWithinTwoSamplesWhereTheCramerRaoBoundAllowsIt) {
+  for (const StepTest s : {StepTest{2.0, 2.0, 0.5, 0.125}, StepTest{2.0, 20.0, 3.0, 0.125},
+                           StepTest{2.0, 60.0, 12.0, 0.125}, StepTest{1.3, 60.0, 0.5, 0.125},
+                           StepTest{2.0, 2.0, 12.0, 0.01}, StepTest{2.0, 20.0, 3.0, 0.01},
+                           StepTest{2.0, 20.0, 12.0, 0.01}}) {
+    EXPECT_LE(3.0 * delay_bound(s), 2.0 * s.h);
+    expect_delay_at_the_bound(s);
+  }
+}
+
+// Where the bound is wider than two samples (slow pools: the level leaves y0 at K A/T mm/s, under
+// the 0.03 mm noise and 0.1 mm resolution), L is recovered within three bound std.
+TEST(DelayPrecision, ASlowPoolsDelayIsWithinThreeCramerRaoStdWhereThatIsWiderThanTwoSamples) {
+  for (const StepTest s : {StepTest{2.0, 300.0, 0.5, 0.125}, StepTest{2.0, 300.0, 12.0, 0.125},
+                           StepTest{2.0, 20.0, 0.5, 0.01}, StepTest{2.0, 60.0, 0.5, 0.01},
+                           StepTest{2.0, 60.0, 12.0, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01},
+                           StepTest{2.0, 300.0, 12.0, 0.01}}) {
+    EXPECT_GT(3.0 * delay_bound(s), 2.0 * s.h);
+    expect_delay_at_the_bound(s);
+  }
+}
+
+// The bound's ingredients: a fine quantiser loses no information (1/σ² per sample), a coarse one
+// loses some on average over the level; and the unknown operating point widens the delay's bound.
+TEST(DelayPrecision, TheBoundsIngredientsBehaveAsTheTheorySays) {
+  EXPECT_NEAR(testing_crb::sample_information(45.01, 0.03, 0.001, 0.0), 1.0 / (0.03 * 0.03), 1e-3 / (0.03 * 0.03));
+  double mean = 0.0;
+  for (int i = 0; i < 100; ++i) mean += testing_crb::sample_information(45.0 + 0.001 * i, 0.03, 0.1, 0.037) / 100.0;
+  EXPECT_LT(mean, 1.0 / (0.03 * 0.03));
+  testing_crb::FopdtExperiment e{2.0, 20.0, 3.0};
+  e.h = 0.01;
+  e.t_step = 0.4;
+  e.n = 12000;
+  e.quantum = 0.0;
+  const double known_y0 = testing_crb::crb_std(e, false)(2), unknown_y0 = testing_crb::crb_std(e, true)(2);
+  EXPECT_LT(known_y0, unknown_y0);
+  e.sigma *= 2.0;  // without a quantiser the bound scales with the noise
+  EXPECT_NEAR(testing_crb::crb_std(e, true)(2), 2.0 * unknown_y0, 1e-9 * unknown_y0);
 }
 
 TEST(TimeScale, AStepAtTheRecordingsSecondSampleFits) {
