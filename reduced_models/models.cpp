@@ -317,15 +317,19 @@ SimulationResult simulate(const Model& model_in, const ExperimentData& data,
       if (k > 0) integral += h * dud[k - 1];
       x[k] = p.K * (integral + Tz * dud[k]);
     }
-  } else if (kind == ModelKind::sopd) {
-    const double delay = p.L / h;
-    solve_zoh_two_lags(held_delayed_input(input_deviation(data, model.actuation), delay), p.T, p.T2, h,
-                       delay_fraction(delay), x.data());
-    for (double& v : x) v *= p.K;
   } else if (is_integer_order(model)) {
-    const double delay = p.L / h;
-    solve_zoh_lag(held_delayed_input(input_deviation(data, model.actuation), delay), p.T, h,
-                  delay_fraction(delay), gain, x.data());
+    const std::vector<double> du = input_deviation(data, model.actuation);
+    const DelayedHold input(du, p.L / h);
+    if (kind == ModelKind::sopd) {
+      solve_zoh_two_lags(input, p.T, p.T2, h, x.data());
+    } else if (is_linear_time_invariant(kind)) {
+      solve_zoh_lag(input, p.T, h, nullptr, x.data());
+    } else {
+      solve_zoh_lag(input, p.T, h, &gain, x.data());
+    }
+    if (is_linear_time_invariant(kind)) {
+      for (double& v : x) v *= p.K;
+    }
   } else {
     // Grünwald–Letnikov (gl.hpp). Its step k integrates over [t_k, t_{k+1}] with the input's
     // mean over that interval (for the held, delayed command: the linear interpolation of the

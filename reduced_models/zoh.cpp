@@ -40,51 +40,41 @@ struct CascadeStep {
 
 }  // namespace
 
-double delay_fraction(double delay_samples) { return delay_samples - std::floor(delay_samples); }
-
-std::vector<HeldInterval> held_delayed_input(const std::vector<double>& u, double delay_samples) {
-  const std::size_t n = u.size();
-  const auto d = static_cast<std::ptrdiff_t>(std::floor(delay_samples));
-  const auto at = [&](std::ptrdiff_t i) {
-    return i >= 0 && i < static_cast<std::ptrdiff_t>(n) ? u[static_cast<std::size_t>(i)] : 0.0;
-  };
-  std::vector<HeldInterval> held(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto i = static_cast<std::ptrdiff_t>(k) - d;
-    held[k] = {at(i - 1), at(i)};
-  }
-  return held;
+DelayedHold::DelayedHold(const std::vector<double>& u, double delay_samples) : u_(u) {
+  const double whole = std::floor(delay_samples);
+  d_ = static_cast<std::ptrdiff_t>(whole);
+  f_ = delay_samples - whole;
 }
 
-void solve_zoh_lag(const std::vector<HeldInterval>& held, double T, double h, double f,
-                   const IntervalGain& gain, double* x) {
-  const std::size_t n = held.size();
+void solve_zoh_lag(const DelayedHold& input, double T, double h, const IntervalGain* gain, double* x) {
+  const std::size_t n = input.size();
   if (n == 0) return;
+  const double f = input.fraction();
   const double a = decay(h, T), a_f = decay((1.0 - f) * h, T);
+  const double w_late = 1.0 - a_f, w_early = a_f - a;
   x[0] = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    const double g = gain(k, x[k]);
+    const double g = gain ? (*gain)(k, x[k]) : 1.0;
     if (k + 1 == n) break;
-    const auto& u = held[k];
-    x[k + 1] = a * x[k] + g * ((1.0 - a_f) * u.late + (a_f - a) * u.early);
+    x[k + 1] = a * x[k] + g * (w_late * input.late(k) + w_early * input.early(k));
   }
 }
 
-void solve_zoh_two_lags(const std::vector<HeldInterval>& held, double T, double T2, double h,
-                        double f, double* x) {
+void solve_zoh_two_lags(const DelayedHold& input, double T, double T2, double h, double* x) {
   if (T <= 0.0 || T2 <= 0.0) {  // one lag (or none): the lags commute
-    solve_zoh_lag(held, std::max(T, T2), h, f, [](std::size_t, double) { return 1.0; }, x);
+    solve_zoh_lag(input, std::max(T, T2), h, nullptr, x);
     return;
   }
-  const std::size_t n = held.size();
+  const std::size_t n = input.size();
   if (n == 0) return;
   // Over the early part (f h) the cascade is driven by `early`, then by `late`.
+  const double f = input.fraction();
   const CascadeStep early_step(f * h, T, T2), late_step((1.0 - f) * h, T, T2);
   double x1 = 0.0, x2 = 0.0;
   x[0] = 0.0;
   for (std::size_t k = 0; k + 1 < n; ++k) {
-    if (f > 0.0) early_step.apply(x1, x2, held[k].early);
-    late_step.apply(x1, x2, held[k].late);
+    if (f > 0.0) early_step.apply(x1, x2, input.early(k));
+    late_step.apply(x1, x2, input.late(k));
     x[k + 1] = x2;
   }
 }

@@ -25,29 +25,36 @@
 
 namespace canalsim::reduced {
 
-// The held, delayed input of interval k: `early` over its first f·h, `late` after.
-struct HeldInterval {
-  double early = 0.0, late = 0.0;
-};
+// The command deviation u (one value per sample, undelayed) delayed by `delay_samples` = d + f
+// (≥ 0) and held: over interval k it is early(k) = u_{k−d−1} for the first f·h, late(k) = u_{k−d}
+// after (zero before the start).
+class DelayedHold {
+ public:
+  DelayedHold(const std::vector<double>& u, double delay_samples);
+  std::size_t size() const { return u_.size(); }
+  double fraction() const { return f_; }
+  double late(std::size_t k) const { return at(static_cast<std::ptrdiff_t>(k) - d_); }
+  double early(std::size_t k) const { return at(static_cast<std::ptrdiff_t>(k) - d_ - 1); }
 
-// Splits a delay of `delay_samples` (≥ 0) into d whole samples and the fraction f, and gives the
-// held input of every interval from the (undelayed) sequence u: late = u_{k−d}, early =
-// u_{k−d−1} (zero before the start).
-std::vector<HeldInterval> held_delayed_input(const std::vector<double>& u, double delay_samples);
-double delay_fraction(double delay_samples);
+ private:
+  double at(std::ptrdiff_t i) const {
+    return i >= 0 && i < static_cast<std::ptrdiff_t>(u_.size()) ? u_[static_cast<std::size_t>(i)] : 0.0;
+  }
+  const std::vector<double>& u_;
+  std::ptrdiff_t d_ = 0;
+  double f_ = 0.0;
+};
 
 // Gain g_k of interval k given the model's deviation x_k at its start (called once per sample,
 // in order, the last one included).
 using IntervalGain = std::function<double(std::size_t k, double x_k)>;
 
-// x_0 … x_{n−1} of T ẋ + x = g u(t − L) under the held input `held` (size n).
-void solve_zoh_lag(const std::vector<HeldInterval>& held, double T, double h, double f,
-                   const IntervalGain& gain, double* x);
+// x_0 … x_{n−1} of T ẋ + x = g u(t − L) under the held input (n = input.size()); `gain` null:
+// g = 1 (a linear model scales the result by K).
+void solve_zoh_lag(const DelayedHold& input, double T, double h, const IntervalGain* gain, double* x);
 
-// x_0 … x_{n−1} of Δy = K / ((T s + 1)(T2 s + 1)) applied to the held input (unit gain; K is
-// applied by the caller).
-void solve_zoh_two_lags(const std::vector<HeldInterval>& held, double T, double T2, double h,
-                        double f, double* x);
+// x_0 … x_{n−1} of Δy = 1 / ((T s + 1)(T2 s + 1)) applied to the held input (unit gain).
+void solve_zoh_two_lags(const DelayedHold& input, double T, double T2, double h, double* x);
 
 // For a first-order lag simulated by solve_zoh_lag: the response to a delay of (d + f) samples
 // is (1 − w) y^{(d)} + w y^{(d+1)}, where y^{(d)} is the response delayed by d whole samples

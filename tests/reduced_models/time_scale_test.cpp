@@ -194,6 +194,36 @@ TEST(DelayPrecision, TheBoundsIngredientsBehaveAsTheTheorySays) {
   EXPECT_NEAR(testing_crb::crb_std(e, true)(2), 2.0 * unknown_y0, 1e-9 * unknown_y0);
 }
 
+// Coarse sampling does not bias the fit: the exact zero-order hold (zoh.hpp) makes the LIOM the
+// continuous model sampled, so a clean closed-form response at 0.125 s and at 1 s (backward
+// Euler read it one sample late with T low by h/2) gives L within a tenth of a sample and T
+// within 1 %.
+TEST(TimeScale, CoarseSamplingDoesNotBiasTheDelayOrTheTimeConstant) {
+  for (const double h : {0.125, 1.0}) {
+    for (const double T : {3.0, 20.0}) {
+      SCOPED_TRACE("h " + std::to_string(h) + " s, T " + std::to_string(T) + " s");
+      const double L = 3.3, K = 2.0, A = 5.0, t_step = 10.0 * h;
+      const auto n = static_cast<std::size_t>((t_step + L + 8.0 * T) / h);
+      std::vector<double> t(n), u(n), y(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        t[k] = static_cast<double>(k) * h;
+        u[k] = k >= 10 ? 20.0 + A : 20.0;
+        const double since = t[k] - t_step - L;
+        y[k] = 45.0 + (since > 0.0 ? K * A * (1.0 - std::exp(-since / T)) : 0.0);
+      }
+      Recording rec;
+      rec.source = "clean.csv";
+      rec.set_column("t_s", t);
+      rec.set_column("u_mm", u);
+      rec.set_column("y_dwe_mm", y);
+      const auto r = fit(ModelKind::liom, prepare_data(rec));
+      EXPECT_NEAR(r.model.p.L, L, 0.1 * h);
+      EXPECT_NEAR(r.model.p.T, T, 0.01 * T);
+      EXPECT_NEAR(r.model.p.K, K, 0.01 * K);
+    }
+  }
+}
+
 TEST(TimeScale, AStepAtTheRecordingsSecondSampleFits) {
   StepTest s{2.0, 20.0, 1.5, 0.125};
   s.step_sample = 1;
