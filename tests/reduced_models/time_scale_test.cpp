@@ -1,9 +1,11 @@
 // Identification at any time scale (issue 14): first-order-plus-delay step responses written in
 // closed form, y(t) = y0 + K A (1 − e^{−(t − t_step − L)/T}) after t_step + L, with noise and a
 // sensor that quantises with an offset, sampled at 0.125 s and at 0.01 s, for time constants of
-// 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 % and L
-// within two samples with the default options. The models nested in others never fit better
-// than the models containing them.
+// 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 %; L
+// within two samples wherever the Cramér–Rao bound allows it (two samples ≥ 3 bound std), else
+// within 3 bound std, with the least-squares criterion (DelayPrecision.*, the bound computed
+// independently in crb.hpp); the paper's IAE fit (the default) within max(2 samples, T/250). The
+// models nested in others never fit better than the models containing them.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,19 +31,18 @@ struct StepTest {
 // resolution 0.1 mm on a grid offset by 0.037 mm (a sensor zero that is not a multiple of the
 // resolution), long enough to settle (five time constants after the delay).
 Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
-  const double u0 = 20.0, A = 5.0, y0 = 45.0, offset = 0.037;
-  const double r = std::getenv("NOQ") ? 0.0 : 0.1;
+  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037;
   const double t_step = static_cast<double>(s.step_sample) * s.h;
   const auto n = static_cast<std::size_t>(std::ceil((t_step + s.L + 5.0 * s.T + 5.0) / s.h));
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, r > 0 ? 0.03 : std::sqrt(0.03*0.03+0.01/12));
+  std::normal_distribution<double> noise(0.0, 0.03);
   std::vector<double> t(n), u(n), y(n);
   for (std::size_t k = 0; k < n; ++k) {
     t[k] = static_cast<double>(k) * s.h;
     u[k] = k >= s.step_sample ? u0 + A : u0;
     const double since = t[k] - t_step - s.L;
     const double level = y0 + (since > 0.0 ? s.K * A * (1.0 - std::exp(-since / s.T)) : 0.0);
-    y[k] = r > 0 ? r * std::round((level + noise(rng) - offset) / r) + offset : level + noise(rng);
+    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
   }
   Recording rec;
   rec.source = "fopdt.csv";
@@ -51,11 +52,13 @@ Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
   return rec;
 }
 
-// K and T within 5 %; L within two samples, or T/250 when that is longer: the sensor cannot
-// see a delay finer than that on a slow pool (for T = 300 s the level moves 0.008 mm in 0.25 s,
-// under the 0.03 mm noise and 0.1 mm resolution; the IAE optimum itself lies 0.1–0.3 s from the
-// true delay for T = 300 s and 0.12 s for T = 60 s at 0.01 s sampling). That the search is not
-// trapped is shown by the IAE: at most 2 % above that of the true model (often below it).
+// The paper's IAE fit: K and T within 5 %; L within two samples, or T/250 when that is longer.
+// The IAE estimate of L is less precise than least squares' (Monte Carlo over 20 seeds at
+// 0.01 s: rms error 0.05 s for T = 60 s and 0.25–0.28 s for T = 300 s, against Cramér–Rao bounds
+// of 0.01–0.025 s and 0.036–0.12 s; docs/reduced-models.md, "Delay precision"): the L1 cost is
+// statistically less efficient, y0 is taken from the 40 samples before the step instead of being
+// fitted, and the quantised readings bias it. That the search is not trapped is shown by the IAE:
+// at most 2 % above that of the true model (often below it).
 void expect_fopdt_recovered(const StepTest& s) {
   SCOPED_TRACE("T " + std::to_string(s.T) + " s, L " + std::to_string(s.L) + " s, h " +
                std::to_string(s.h) + " s");
@@ -68,45 +71,6 @@ void expect_fopdt_recovered(const StepTest& s) {
   testing::set_parameters(truth, {{"K", s.K}, {"T", s.T}, {"L", s.L}});
   EXPECT_LE(r.iae_total, 1.02 * validate_model(truth, data).iae);
   EXPECT_GT(r.nrmse.front(), 90.0);
-}
-
-// Exploration: the CRB of L and the fit's error.
-TEST(DelayPrecision, Explore) {
-  const int seeds = std::getenv("SEEDS") ? std::atoi(std::getenv("SEEDS")) : 1;
-  for (const double h : {0.125, 0.01}) {
-    for (const double T : {2.0, 20.0, 60.0, 300.0}) {
-      for (const double L : {0.5, 3.0, 12.0}) {
-        const StepTest s{2.0, T, L, h};
-        testing_crb::FopdtExperiment e{s.K, s.T, s.L};
-        e.h = h;
-        e.t_step = static_cast<double>(s.step_sample) * h;
-        e.n = static_cast<std::size_t>(std::ceil((e.t_step + s.L + 5.0 * s.T + 5.0) / s.h));
-        if (std::getenv("NOQ")) { e.quantum = 0; e.sigma = std::sqrt(0.03*0.03+0.01/12); }
-        const auto c3 = testing_crb::crb_std(e, false), c4 = testing_crb::crb_std(e, true);
-        double sum = 0, sum2 = 0, worst = 0, sy0 = 0;
-        for (int seed = 0; seed < seeds; ++seed) {
-          const auto data = prepare_data(fopdt_step_recording(s, 3 + seed));
-          FitOptions o;
-          if (std::getenv("LS")) o.criterion = Criterion::least_squares;
-          const auto r = fit(ModelKind::liom, data, o);
-          const double dL = r.model.p.L - L;
-          sum += dL; sum2 += dL * dL; worst = std::max(worst, std::abs(dL));
-          sy0 += (r.y0_mm.front() - 45.0) * (r.y0_mm.front() - 45.0);
-          if (std::getenv("CHK")) {
-            Model truth{ModelKind::liom, {}, {}};
-            testing::set_parameters(truth, {{"K", s.K}, {"T", s.T}, {"L", s.L}});
-            auto d2 = data; d2.y0_mm = 45.0;
-            double sse_t = 0, sse_f = 0;
-            auto yt = simulate(truth, d2).y_dwe_mm; 
-            for (std::size_t k = 0; k < yt.size(); ++k) { sse_t += std::pow(yt[k]-data.y_dwe_mm[k],2); sse_f += std::pow(r.response[0][k]-data.y_dwe_mm[k],2);}
-            std::printf("   seed %d dL %+.4f sse fit %.6f truth %.6f (h-scaled cost %.6f)\n", seed, dL, sse_f, sse_t, r.cost_total);
-          }
-        }
-        std::printf("h %.3f T %5.0f L %4.1f | crbL3 %.4f crbL4 %.4f | 2h %.3f | mean dL %+.4f rms dL %.4f worst %.4f rms y0 err %.4f\n", h, T, L,
-                    c3(2), c4(2), 2*h, sum/seeds, std::sqrt(sum2/seeds), worst, std::sqrt(sy0/seeds));
-      }
-    }
-  }
 }
 
 TEST(TimeScale, FopdtStepResponsesAreRecoveredAtAQuarterSecondSampling) {
@@ -335,6 +299,29 @@ TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
       {ModelKind::nlfom_s, ModelKind::liom}};
   for (const auto& [outer, inner] : pairs) {
     EXPECT_LE(iae[outer], iae[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
+  }
+}
+
+// The same under the least-squares criterion (its sum of squares, with the fitted offsets and the
+// sensor's mean reading), for the models it polishes.
+TEST(NestedModels, UnderLeastSquaresAModelNeverFitsWorseThanAModelItContains) {
+  Model truth{ModelKind::sopd, {}, {}};
+  testing::set_parameters(truth, {{"K", 0.8}, {"T", 3.0}, {"T2", 0.8}, {"L", 2.5}});
+  testing::SyntheticSpec spec;
+  spec.n = 1500;
+  spec.y_up_swing = 8.0;
+  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  FitOptions o;
+  o.criterion = Criterion::least_squares;
+  std::map<ModelKind, double> cost;
+  for (auto kind : {ModelKind::liom, ModelKind::lfom, ModelKind::nliom_f, ModelKind::nlfom_f}) {
+    cost[kind] = fit(kind, data, o).cost_total;
+  }
+  const std::vector<std::pair<ModelKind, ModelKind>> pairs = {
+      {ModelKind::lfom, ModelKind::liom}, {ModelKind::nliom_f, ModelKind::liom},
+      {ModelKind::nlfom_f, ModelKind::nliom_f}, {ModelKind::nlfom_f, ModelKind::lfom}};
+  for (const auto& [outer, inner] : pairs) {
+    EXPECT_LE(cost[outer], cost[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
   }
 }
 
