@@ -24,6 +24,8 @@ struct BlindtestArguments {
   std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
   std::vector<std::string> effects;
   bool verbose = false;
+  bool realistic = false;
+  int two_effect_trials = 10;
   std::string model;
   double quantum_mm = 0.05;
 };
@@ -45,8 +47,14 @@ void run(const BlindtestArguments& args) {
     options.model = m;
     if (options.effects.empty()) options.effects = {"gate_rate_limit", "sensor_quantization"};
   }
+  if (args.realistic) {
+    diagnosis::RealisticTruth realistic;
+    realistic.two_effect_trials = args.two_effect_trials;
+    options.realistic = realistic;
+  }
   if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
-  ProgressLine progress("blind test, " + std::to_string(args.trials) + " trials on " +
+  const int total = args.trials + (args.realistic ? args.two_effect_trials : 0);
+  ProgressLine progress(std::string(args.realistic ? "realistic " : "") + "blind test, " + std::to_string(total) + " trials on " +
                         std::to_string(args.threads) + " threads");
   options.progress = progress.callback();
   const diagnosis::BlindtestResult result = diagnosis::run_blindtest(s, options);
@@ -58,6 +66,17 @@ void run(const BlindtestArguments& args) {
       std::printf("%5d  %-21s %6.3f  %-21s %9.3f %6.1f%% %+6.2f %s\n", t.index, t.truth.effect.c_str(),
                   t.truth.value, t.verdict.c_str(), t.estimate, 100.0 * t.parameter_error, t.heldout_gain,
                   t.message.c_str());
+      if (t.second) {
+        std::string named;
+        for (const auto& n : t.named) named += (named.empty() ? "" : ", ") + n;
+        std::printf("       + %-19s %6.3f  named: %s (%s)\n", t.second->effect.c_str(), t.second->value,
+                    named.empty() ? "nothing" : named.c_str(), t.both_named ? "both" : "not both");
+      }
+      if (!t.truth_drawn.empty()) {
+        std::printf("       truth: %s\n       %.1f s: recordings %.1f s, calibration %.1f s, diagnosis %.1f s\n",
+                    t.truth_drawn.c_str(), t.seconds, t.simulation_seconds, t.calibration_seconds,
+                    t.seconds - t.simulation_seconds - t.calibration_seconds);
+      }
     }
   }
   if (!args.json.empty()) {
@@ -93,6 +112,12 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial (default op1 op2 op3 op4)");
   cmd->add_option("--effects", args->effects, "Draw only these effects (and none); default the whole catalog");
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
+  cmd->add_flag("--realistic", args->realistic,
+                "Truth simulated differently (4x cells, other limiter and Courant number) with perturbed "
+                "physics; calibrate on a clean baseline of it, then diagnose (docs/diagnosis.md)");
+  cmd->add_option("--two-effect-trials", args->two_effect_trials,
+                  "--realistic: trials with two concealed effects added to --trials (default 10)")
+      ->check(integer_in(0, 100000, "a number of trials"));
   cmd->add_option("--model", args->model,
                   "Diagnose against this reduced model instead of the scenario (draws gate_rate_limit and "
                   "sensor_quantization unless --effects says otherwise)");

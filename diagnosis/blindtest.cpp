@@ -1,7 +1,5 @@
 #include "diagnosis/blindtest.hpp"
 
-#include "core/parallel.hpp"
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -12,7 +10,9 @@
 #include <numeric>
 #include <sstream>
 
+#include "core/format.hpp"
 #include "core/parallel.hpp"
+#include "diagnosis/blindtest_trial.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::diagnosis {
@@ -53,6 +53,30 @@ Status BlindtestOptions::validate() const {
                   "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
   check.nested("diagnose", diagnose.validate());
+  check.require(!(model && realistic), "realistic", "not with a reduced model (the realistic test calibrates a scenario)");
+  if (realistic) check.nested("realistic", realistic->validate());
+  return check.status();
+}
+
+Status RealisticTruth::validate() const {
+  Validator check;
+  check.require(numerics.cells_factor >= 1 && numerics.cells_factor <= 16, "numerics.cells_factor",
+                numerics.cells_factor, "1..16");
+  check.require(numerics.cfl > 0.0 && numerics.cfl <= 1.0, "numerics.cfl", numerics.cfl, "(0, 1]");
+  check.require(noise_low_mm >= 0.0 && noise_low_mm <= noise_high_mm, "noise_low_mm", noise_low_mm,
+                "[0, noise_high_mm]");
+  check.require(two_effect_trials >= 0, "two_effect_trials", two_effect_trials, ">= 0");
+  for (const auto& [key, value] : {std::pair{"discharge_coefficient", tolerances.discharge_coefficient},
+                                   std::pair{"manning_n", tolerances.manning_n}}) {
+    check.require(value >= 0.0 && value < 0.9, std::string("tolerances.") + key, value, "[0, 0.9)");
+  }
+  for (const auto& [key, value] : {std::pair{"downstream_opening_mm", tolerances.downstream_opening_mm},
+                                   std::pair{"tail_level_mm", tolerances.tail_level_mm},
+                                   std::pair{"level_offset_mm", tolerances.level_offset_mm}}) {
+    check.require(value >= 0.0 && value <= 10.0, std::string("tolerances.") + key, value, "[0, 10]");
+  }
+  const std::string calibration_problem = calibration.validate();
+  check.require(calibration_problem.empty(), "calibration", calibration_problem);
   return check.status();
 }
 
@@ -115,53 +139,47 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   if (o.include_none) classes.push_back("none");
   for (const auto& e : effect_names(o)) classes.push_back(e);
   std::mt19937_64 rng(o.seed);
-  std::vector<ConcealedEffect> truths;
-  while (truths.size() < static_cast<std::size_t>(o.trials)) {
+  std::vector<Trial> trials;
+  while (trials.size() < static_cast<std::size_t>(o.trials)) {
     std::vector<std::string> block = classes;
     std::shuffle(block.begin(), block.end(), rng);
     for (const auto& c : block) {
-      if (truths.size() < static_cast<std::size_t>(o.trials)) truths.push_back(draw_effect(c, rng));
+      if (trials.size() < static_cast<std::size_t>(o.trials)) {
+        Trial t;
+        t.truth = draw_effect(c, rng);
+        trials.push_back(std::move(t));
+      }
     }
   }
+  // Two effects at once (realistic test): two different effects of the catalog, drawn after the
+  // single ones so that those stay the same whatever their number.
+  const std::vector<std::string> effects = effect_names(o);
+  for (int k = 0; o.realistic && k < o.realistic->two_effect_trials && effects.size() >= 2; ++k) {
+    const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+    const std::size_t a = pick(effects.size());
+    std::size_t b = pick(effects.size() - 1);
+    if (b >= a) ++b;
+    Trial t;
+    t.truth = draw_effect(effects[a], rng);
+    t.second = draw_effect(effects[b], rng);
+    trials.push_back(std::move(t));
+  }
+  for (std::size_t i = 0; i < trials.size(); ++i) trials[i].index = static_cast<int>(i);
+
   BlindtestResult result;
-  result.trials.resize(truths.size());
+  result.trials = std::move(trials);
   std::atomic<int> done{0};
   std::mutex progress_mutex;
-  DiagnoseOptions diagnose_options = o.diagnose;
-  diagnose_options.threads = 1;
-  diagnose_options.progress = nullptr;
+  blind::TrialContext context{base, experiments, inflow, o, o.diagnose};
+  context.diagnose.threads = 1;
+  context.diagnose.progress = nullptr;
+  const int total = static_cast<int>(result.trials.size());
   // Each trial catches its own failure (verdict "failed"), so one bad trial does not end the test.
-  parallel_for(truths.size(), o.threads, [&](std::size_t i) {
+  parallel_for(result.trials.size(), o.threads, [&](std::size_t i) {
     Trial& trial = result.trials[i];
-    trial.index = static_cast<int>(i);
-    trial.truth = truths[i];
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      std::vector<Recording> recordings;
-      for (std::size_t k = 0; k < experiments.size(); ++k) {
-        scenarios::Scenario s = base;
-        scenarios::ExperimentSpec e = experiments[k];
-        scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
-        sensors.noise_std_mm = o.noise_std_mm;
-        sensors.seed = o.seed * 1000003ULL + i * 101ULL + k;
-        e.sensors = sensors;
-        conceal(trial.truth, s, e, inflow[k]);
-        Recording r = scenarios::simulate(s, e);
-        r.source = "trial" + std::to_string(i) + "/" + e.name;
-        recordings.push_back(std::move(r));
-      }
-      const Diagnosis d = o.model ? diagnose_model(recordings, *o.model) : diagnose(base, recordings, diagnose_options);
-      if (!d.ok) throw std::runtime_error(d.message);
-      trial.verdict = d.verdict;
-      trial.correct = trial.verdict == trial.truth.effect;
-      trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
-      for (const auto& e : d.effects) {
-        if (e.name == trial.truth.effect) {
-          trial.estimate = e.parameter.value;
-          trial.parameter_error = parameter_error(trial.truth, e.parameter.value);
-        }
-        if (e.name == trial.verdict) trial.heldout_gain = e.heldout_nrmse_after - e.heldout_nrmse_before;
-      }
+      blind::run_trial(context, trial);
     } catch (const std::exception& ex) {
       trial.verdict = "failed";
       trial.message = ex.what();
@@ -170,7 +188,7 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     const int finished = ++done;
     if (o.progress) {
       const std::lock_guard lock(progress_mutex);
-      o.progress({static_cast<double>(finished) / o.trials, std::to_string(finished) + "/" + std::to_string(o.trials) + " trials"});
+      o.progress({static_cast<double>(finished) / total, std::to_string(finished) + "/" + std::to_string(total) + " trials"});
     }
   });
 
@@ -186,6 +204,11 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   double total_seconds = 0.0;
   for (const auto& t : result.trials) {
     total_seconds += t.seconds;
+    if (t.second) {
+      ++result.two_effect_trials;
+      result.two_effect_both += t.both_named;
+      continue;
+    }
     result.confusion[index_of(t.truth.effect)][index_of(t.verdict)]++;
     result.correct += t.correct;
     if (t.truth.effect == "none") {
@@ -201,7 +224,8 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     result.within_25 += t.parameter_error <= 0.25;
     result.gain_positive += t.heldout_gain > 0.0;
   }
-  result.accuracy = static_cast<double>(result.correct) / static_cast<double>(std::max<std::size_t>(result.trials.size(), 1));
+  const std::size_t single = result.trials.size() - static_cast<std::size_t>(result.two_effect_trials);
+  result.accuracy = static_cast<double>(result.correct) / static_cast<double>(std::max<std::size_t>(single, 1));
   result.false_alarm_rate = result.clean_trials ? static_cast<double>(result.false_alarms) / result.clean_trials : 0.0;
   if (!errors.empty()) {
     std::sort(errors.begin(), errors.end());
@@ -218,10 +242,22 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
 std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o) {
   std::ostringstream s;
   char buf[512];
-  s << "Diagnosis blind test: " << r.trials.size() << " trials, seed " << o.seed << ", experiments";
+  s << (o.realistic ? "Realistic diagnosis blind test: " : "Diagnosis blind test: ") << r.trials.size()
+    << " trials, seed " << o.seed << ", experiments";
   for (const auto& e : o.experiments) s << ' ' << e;
-  s << (o.duration_s > 0.0 ? " (" + std::to_string(o.duration_s) + " s)" : "") << ", level noise " << o.noise_std_mm
-    << " mm\n\nconfusion matrix (rows: concealed effect, columns: verdict)\n";
+  s << (o.duration_s > 0.0 ? " (" + std::to_string(o.duration_s) + " s)" : "")
+    << (o.realistic ? "" : ", level noise " + format_g(o.noise_std_mm) + " mm") << '\n';
+  if (o.realistic) {
+    const RealisticTruth& t = *o.realistic;
+    s << "truth: " << t.numerics.cells_factor << "x the cells, " << "the other limiter, Courant "
+      << format_g(t.numerics.cfl) << "; Cd ±" << format_g(100 * t.tolerances.discharge_coefficient) << " %, Manning n ±"
+      << format_g(100 * t.tolerances.manning_n) << " %, downstream opening ±" << format_g(t.tolerances.downstream_opening_mm)
+      << " mm, tail level ±" << format_g(t.tolerances.tail_level_mm) << " mm, level offsets ±"
+      << format_g(t.tolerances.level_offset_mm) << " mm, noise " << format_g(t.noise_low_mm) << "–"
+      << format_g(t.noise_high_mm) << " mm; levels and command only;\n"
+      << "diagnosed against the scenario calibrated on a clean baseline of the same truth (other PRBS)\n";
+  }
+  s << "\nconfusion matrix (rows: concealed effect, columns: verdict; one-effect and clean trials)\n";
   std::snprintf(buf, sizeof buf, "%-8s", "");
   s << buf;
   for (const auto& c : r.classes) {
@@ -256,6 +292,11 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
                 100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.mean_heldout_gain, r.min_heldout_gain,
                 r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;
+  if (r.two_effect_trials > 0) {
+    std::snprintf(buf, sizeof buf, "two effects at once     both named in %d/%d = %.1f%%\n", r.two_effect_both,
+                  r.two_effect_trials, 100.0 * r.two_effect_both / r.two_effect_trials);
+    s << buf;
+  }
   return s.str();
 }
 
@@ -268,7 +309,12 @@ nlohmann::json to_json(const BlindtestResult& r) {
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
                       {"verdict", t.verdict}, {"correct", t.correct}, {"estimate", num(t.estimate)},
                       {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
-                      {"seconds", t.seconds}, {"message", t.message}});
+                      {"seconds", t.seconds}, {"message", t.message}, {"named", t.named}});
+    if (t.second) {
+      trials.back()["second"] = {{"concealed", t.second->effect}, {"value", t.second->value}};
+      trials.back()["both_named"] = t.both_named;
+    }
+    if (!t.truth_drawn.empty()) trials.back()["truth"] = t.truth_drawn;
   }
   return json{{"classes", r.classes}, {"confusion", r.confusion}, {"accuracy", r.accuracy},
               {"effect_trials", r.effect_trials}, {"effect_correct", r.effect_correct},
@@ -276,7 +322,8 @@ nlohmann::json to_json(const BlindtestResult& r) {
               {"false_alarm_rate", r.false_alarm_rate}, {"within_25", r.within_25},
               {"median_parameter_error", r.median_parameter_error}, {"max_parameter_error", r.max_parameter_error},
               {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain},
-              {"min_heldout_gain", r.min_heldout_gain}, {"seconds", r.seconds}, {"trials", trials}};
+              {"min_heldout_gain", r.min_heldout_gain}, {"two_effect_trials", r.two_effect_trials},
+              {"two_effect_both_named", r.two_effect_both}, {"seconds", r.seconds}, {"trials", trials}};
 }
 
 }  // namespace canalsim::diagnosis

@@ -8,6 +8,16 @@
 // ×1.08–1.2; friction ×0.5 or ×2–4; lateral_outflow 3–15% of the inflow; downstream_gate
 // ±0.5–2 mm. Classes are drawn in shuffled blocks of all ten, so every class appears about
 // equally often.
+//
+// The realistic blind test (issue 13, `blindtest --realistic`) does not let the diagnosis' own
+// model be the truth: each trial's canal is simulated differently (RealisticTruth::numerics: four
+// times the cells, the other limiter, another Courant number) with its uncertain physics drawn
+// within tolerances (Cd ±5 %, Manning n ±25 %, downstream opening and tail level ±1 mm, level
+// offsets ±0.5 mm) and a level noise of 0.03–0.1 mm; the recordings hold the command and the
+// levels only (no gate position, no flow). A clean baseline of the same truth — another PRBS
+// realisation — is calibrated on first (calibration/calibrate.hpp), and the trial's recordings are
+// diagnosed against the calibrated scenario, with the calibration's uncertainty. Trials with two
+// concealed effects are added, scored on whether both are named.
 #pragma once
 
 #include <cstdint>
@@ -23,9 +33,32 @@
 #include "core/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
+#include "calibration/calibrate.hpp"
 #include "scenarios/scenario.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::diagnosis {
+
+struct RealisticTruth {
+  scenarios::TruthVariation numerics;
+  scenarios::UncertainTolerances tolerances;
+  double noise_low_mm = 0.03, noise_high_mm = 0.1;  // level noise, drawn per trial
+  int two_effect_trials = 10;                        // added to `trials`; >= 0
+  // The baseline runs each experiment with its PRBS seed plus this: other recordings than the
+  // trial's, as a canal operator's baseline would be.
+  std::uint64_t baseline_seed_offset = 1000;
+  // One Levenberg–Marquardt start and no grid check: the perturbations are small, so the
+  // scenario's values are a good start, and 40 calibrations must fit in a CI-sized run.
+  calibration::CalibrateOptions calibration = lean_calibration();  // its threads are set to 1
+  Status validate() const;
+  static calibration::CalibrateOptions lean_calibration() {
+    calibration::CalibrateOptions o;
+    o.starts = 1;
+    o.screened_points = 0;
+    o.grid_check = false;
+    return o;
+  }
+};
 
 struct BlindtestOptions {
   int trials = 40;                  // >= 1
@@ -42,6 +75,8 @@ struct BlindtestOptions {
   // of the scenario; only the effects a reduced model can name make sense to draw then
   // (gate_rate_limit, sensor_quantization).
   std::optional<ModelDiagnoseOptions> model;
+  // When set, the realistic blind test (header); not with `model`.
+  std::optional<RealisticTruth> realistic;
   ProgressCallback progress;  // share of the trials done
   Status validate() const;
 };
@@ -54,12 +89,17 @@ struct ConcealedEffect {
 struct Trial {
   int index = 0;
   ConcealedEffect truth;
+  std::optional<ConcealedEffect> second;  // two-effect trials
   std::string verdict;
+  std::vector<std::string> named;   // the diagnosis' explanation: the verdict and any further effects
+  bool both_named = false;          // two-effect trials: both concealed effects are in `named`
+  std::string truth_drawn;          // realistic: the perturbed physics of this trial's truth
   double estimate = 0.0;            // the diagnosis' parameter for the true effect's name
   double parameter_error = 0.0;     // relative (see docs/diagnosis.md); NaN without an effect
   double heldout_gain = 0.0;        // held-out Nrmse after − before of the verdict [points]
   bool correct = false;
   double seconds = 0.0;
+  double simulation_seconds = 0.0, calibration_seconds = 0.0;   // realistic: the truth's recordings, the baseline calibration
   std::string message;              // failure, if any
 };
 
@@ -73,6 +113,7 @@ struct BlindtestResult {
   int within_25 = 0;                          // correct attributions with parameter error <= 25%
   double median_parameter_error = 0.0, max_parameter_error = 0.0;
   int gain_positive = 0;                      // correct attributions whose held-out Nrmse improved
+  int two_effect_trials = 0, two_effect_both = 0;   // realistic: trials with two effects, both named
   double mean_heldout_gain = 0.0, min_heldout_gain = 0.0;
   double seconds = 0.0, mean_trial_seconds = 0.0;
 };

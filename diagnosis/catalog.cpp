@@ -83,6 +83,34 @@ bool is_material(Effect effect, double parameter) {
   }
 }
 
+std::string separating_experiment(const std::string& a, const std::string& b) {
+  const auto pair_is = [&](const char* x, const char* y) { return (a == x && b == y) || (a == y && b == x); };
+  // What each pair's signatures share, and the operating change under which they part.
+  if (pair_is("gate_leakage", "discharge_coefficient")) {
+    return "steps at a small and a large gate opening: a leak adds the same extra opening at both (it dominates "
+           "when the gate is nearly closed), a discharge coefficient scales the flow in proportion to the opening";
+  }
+  if (pair_is("sensor_offset", "downstream_gate")) {
+    return "a recording at another flow, or the levels read in still water with the gates closed: an offset "
+           "shifts every reading by the same amount at any flow, a downstream gate setting shifts the levels by "
+           "an amount that grows with the flow";
+  }
+  if (pair_is("friction", "downstream_gate") || pair_is("friction", "sensor_offset")) {
+    return "recordings at two flows: friction changes the level drop along the pool with the square of the flow, "
+           "an offset or a downstream setting shifts the levels more uniformly";
+  }
+  if (pair_is("lateral_outflow", "discharge_coefficient") || pair_is("lateral_outflow", "gate_leakage")) {
+    return "a level sensor upstream of the offtake, or a flow measured at the downstream gate: an outflow along "
+           "the pool lowers the downstream flow, a head-gate law changes the inflow itself";
+  }
+  if (pair_is("sensor_delay", "gate_rate_limit")) {
+    return "a step of the command with the gate position logged: a slow gate lags the command in its position, "
+           "a sensor delay lags only the readings";
+  }
+  return "an experiment at another operating point (gate opening and flow), where the two effects change the "
+         "levels by different amounts";
+}
+
 std::string unsupported_reason(Effect effect, const scenarios::Scenario& s) {
   switch (effect) {
     case Effect::gate_rate_limit:

@@ -84,6 +84,10 @@ using calibration::sensor_model_of;
 void apply_effect(Effect effect, double parameter, scenarios::Scenario& scenario, double inflow_m3s);
 void apply_effect(Effect effect, double parameter, SensorModel& sensors);
 
+// The experiment that would tell two effects apart when a set of recordings cannot (an ambiguous
+// pair of the diagnosis, pipeline.hpp): what differs between their signatures, in words.
+std::string separating_experiment(const std::string& a, const std::string& b);
+
 // Why the scenario cannot carry the effect, or empty.
 std::string unsupported_reason(Effect effect, const scenarios::Scenario& scenario);
 

@@ -9,6 +9,7 @@
 
 #include "calibration/replay.hpp"
 #include "core/parallel.hpp"
+#include "diagnosis/calibrated.hpp"
 #include "diagnosis/scenario_engine.hpp"
 #include "reduced_models/metrics.hpp"
 
@@ -43,6 +44,32 @@ void Engine::prepare() {
   scale_ = std::move(w.scale);
   weight_ = std::move(w.weight);
   for (const auto& p : recs_) fit_samples_ += p.data.size() * p.n_fit;
+}
+
+Scenario Engine::scenario_for(std::size_t i) const {
+  Scenario s = base_;
+  if (carried_lateral_ != 0.0) apply_effect(Effect::lateral_outflow, carried_lateral_, s, carried_inflow_m3s_.at(i));
+  return s;
+}
+
+// The engine of the same recordings whose nominal model carries `effects`: hydraulic and sensor
+// effects edit the scenario (catalog.hpp apply_effect); a lateral outflow keeps this engine's
+// inflow as its reference, so that its fraction means the same in every engine.
+std::unique_ptr<Explainer> Engine::with_effects(const std::vector<std::pair<std::string, double>>& effects) const {
+  auto engine = std::make_unique<Engine>(base_, recordings_, o_);
+  engine->carried_lateral_ = carried_lateral_;
+  engine->carried_inflow_m3s_ = carried_lateral_ != 0.0 ? carried_inflow_m3s_ : inflow_m3s_;
+  for (const auto& [name, value] : effects) {
+    const Effect effect = *effect_from_name(name);
+    if (effect == Effect::lateral_outflow) {
+      engine->carried_lateral_ += value;
+    } else if (effect == Effect::sensor_quantization) {
+      engine->base_.sensors.resolution_mm = std::max(value, base_.sensors.resolution_mm);
+    } else {
+      apply_effect(effect, value, engine->base_, 0.0);
+    }
+  }
+  return engine;
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
@@ -125,7 +152,7 @@ double Engine::balanced(const Costs& c, bool heldout) const {
 
 void Engine::simulate_nominal() {
   truth_.assign(recs_.size(), {});
-  parallel_for(recs_.size(), o_.threads, [&](std::size_t i) { truth_[i] = simulate_true(base_, recs_[i]); });
+  parallel_for(recs_.size(), o_.threads, [&](std::size_t i) { truth_[i] = simulate_true(scenario_for(i), recs_[i]); });
   nominal_.clear();
   inflow_m3s_.clear();
   for (std::size_t i = 0; i < recs_.size(); ++i) {
@@ -186,7 +213,7 @@ std::vector<Channels> Engine::predict(Effect effect, double theta) {
     return out;
   }
   parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
-    Scenario s = base_;
+    Scenario s = scenario_for(i);
     apply_effect(effect, parameter, s, inflow_m3s_[i]);
     out[i] = observe(simulate_true(s, recs_[i]), sensors_, period_);
   });
@@ -251,6 +278,16 @@ double Engine::parameter_std(Effect effect, const Point& best) const {
   return theta_sd * slope;
 }
 
+// Whether the effect moves the calibrated physics by more than calibrated_z standard deviations of
+// what the baseline calibration left open (diagnosis/calibrated.hpp); true for an uncalibrated
+// scenario.
+bool Engine::beyond_calibration(Effect effect, double parameter) const {
+  double opening = 0.0;
+  for (const auto& p : recs_) opening += p.operating_point_mm / static_cast<double>(recs_.size());
+  const double open = o_.calibrated_z * calibration_uncertainty(effect, base_, o_.calibrated_std, opening);
+  return open == 0.0 || departure(effect, parameter) > open;
+}
+
 // An effect's result before it is fitted: its names, and the nominal model's figures before and
 // after.
 EffectResult Engine::unchanged(Effect effect) const {
@@ -282,7 +319,7 @@ EffectResult Engine::judge(Effect effect, Point best, int sims) {
   out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
   out.parameter.value = to_parameter(effect, best.theta);
   out.parameter.std = parameter_std(effect, best);
-  out.material = is_material(effect, out.parameter.value);
+  out.material = is_material(effect, out.parameter.value) && beyond_calibration(effect, out.parameter.value);
   out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, false});
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
@@ -366,6 +403,10 @@ Status DiagnoseOptions::validate() const {
                 command_lead_samples, "[0, 1]");
   check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");
   check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
+  check.require(calibrated_z > 0.0, "calibrated_z", calibrated_z, "> 0");
+  for (const auto& [name, sd] : calibrated_std) {
+    check.require(sd >= 0.0, "calibrated_std." + name, sd, ">= 0 (a standard deviation)");
+  }
   check.nested("tests", tests.validate());
   check.nested("locate", locate.validate());
   for (const auto& c : candidates) {

@@ -62,6 +62,13 @@ struct DiagnoseOptions {
   // before the recording started is unknown (the replay settles at the recording's
   // operating_opening_mm metadata, or at its first command), so its first transient may differ.
   double warmup_s = 10.0;        // [0, a third of the shortest recording]
+  // What a calibration of the scenario left open (docs/calibration.md): calibration parameter name
+  // (cd_free, cd_submerged, manning_n, downstream_opening_mm, offset_mm, offset_y_dwe_mm, ...) →
+  // one standard deviation in its unit. An effect that moves a calibrated parameter is material
+  // only beyond `calibrated_z` of these standard deviations (issue 13: "material only where it
+  // exceeds what the calibration leaves open"). Empty for an uncalibrated scenario.
+  std::map<std::string, double> calibrated_std;
+  double calibrated_z = 3.0;     // > 0
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;  // share of the simulations done, and the stage

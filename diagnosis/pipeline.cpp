@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "core/errors.hpp"
+#include "diagnosis/catalog.hpp"
 #include "core/format.hpp"
 
 namespace canalsim::diagnosis {
@@ -16,6 +18,73 @@ std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets,
   std::vector<ResidualTests> out;
   for (const auto& r : sets) out.push_back(residual_tests(r.residuals.at(r.primary), r.u, o));
   return out;
+}
+
+using EffectValues = std::vector<std::pair<std::string, double>>;
+
+// The explanation's effects with their parameters, leaving out `skip` ("" = none).
+EffectValues values_of(const std::vector<ExplainedEffect>& explanation, const std::string& skip = "") {
+  EffectValues out;
+  for (const auto& e : explanation) {
+    if (e.name != skip) out.emplace_back(e.name, e.parameter.value);
+  }
+  return out;
+}
+
+// The candidate fitted against the model that carries `others` (nullopt if the engine cannot
+// stack effects).
+std::optional<EffectResult> explain_on_top(const Explainer& explainer, const EffectValues& others,
+                                           const std::string& candidate) {
+  const std::unique_ptr<Explainer> stacked = explainer.with_effects(others);
+  if (!stacked) return std::nullopt;
+  stacked->nominal_residuals();
+  return stacked->explain(candidate);
+}
+
+// Step 5 of the pipeline (header): adds effects to the verdict while the best remaining candidate,
+// fitted against the model corrected by the effects so far, is significant on held-out data; then
+// refits every effect with the others in place.
+void explain_with_several(Explainer& explainer, const PipelineSettings& settings, Diagnosis& d) {
+  const EffectResult& verdict = d.effects.front();
+  d.explanation.push_back({verdict.name, verdict.parameter, verdict.score, verdict.score});
+  std::vector<std::string> remaining;
+  for (std::size_t i = 1; i < d.effects.size(); ++i) {
+    if (d.effects[i].note.empty() && d.effects[i].score >= settings.stack_min_score) remaining.push_back(d.effects[i].name);
+  }
+  std::map<std::string, EffectResult> on_top_of_verdict;
+  while (static_cast<int>(d.explanation.size()) < settings.max_effects && !remaining.empty()) {
+    const std::unique_ptr<Explainer> stacked = explainer.with_effects(values_of(d.explanation));
+    if (!stacked) return;
+    stacked->nominal_residuals();
+    std::optional<EffectResult> best;
+    for (const auto& name : remaining) {
+      EffectResult r = stacked->explain(name);
+      if (d.explanation.size() == 1) on_top_of_verdict[name] = r;
+      if (r.significant && (!best || r.score > best->score)) best = std::move(r);
+    }
+    if (!best) break;
+    remaining.erase(std::find(remaining.begin(), remaining.end(), best->name));
+    double left = 1.0;  // share of the nominal held-out cost the explanation leaves
+    for (const auto& e : d.explanation) left *= 1.0 - std::clamp(e.score, 0.0, 1.0);
+    d.explanation.push_back({best->name, best->parameter, best->score, left * std::clamp(best->score, 0.0, 1.0)});
+  }
+  if (d.explanation.size() > 1) {  // joint refit: each effect against the model with the others
+    const std::vector<ExplainedEffect> found = d.explanation;
+    for (auto& e : d.explanation) {
+      if (auto r = explain_on_top(explainer, values_of(found, e.name), e.name)) e.parameter = r->parameter;
+    }
+  }
+  // Ambiguity: a significant runner-up about as good as the verdict that adds nothing on top of it.
+  for (std::size_t i = 1; i < d.effects.size(); ++i) {
+    const EffectResult& r = d.effects[i];
+    if (!r.significant || verdict.score - r.score > settings.ambiguity_margin) continue;
+    const auto on_top = on_top_of_verdict.find(r.name);
+    const bool adds = std::any_of(d.explanation.begin(), d.explanation.end(),
+                                  [&](const ExplainedEffect& e) { return e.name == r.name; });
+    if (adds || (on_top != on_top_of_verdict.end() && on_top->second.significant)) continue;
+    d.ambiguous.push_back({verdict.name, r.name, verdict.parameter, r.parameter, verdict.score, r.score,
+                           separating_experiment(verdict.name, r.name)});
+  }
 }
 
 }  // namespace
@@ -45,6 +114,10 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
       return a.score > b.score;
     });
     const std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
+    if (!corrected.empty()) {
+      progress(0.95, "explanation");
+      explain_with_several(explainer, settings, d);
+    }
     const auto after = explainer.residuals_with(corrected);
     d.mismatch_after = locate(after, settings.locate);
     d.tests_after = tests_of(after, settings.tests);

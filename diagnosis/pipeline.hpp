@@ -5,7 +5,13 @@
 //   2. explain: every candidate effect fitted and judged on held-out data (by the Explainer);
 //   3. rank: significant first, then effects that could be evaluated, then by score;
 //   4. verdict: the best significant effect, else `none` (within the noise) or `unexplained`;
-//   5. the corrected prediction of the verdict → locate and test again.
+//   5. explanation with several effects (issue 13): against the model corrected by the effects
+//      found so far, the remaining candidates are fitted again and the best one added while its
+//      held-out gain stays significant; every effect is then refitted with the others in place.
+//      A runner-up that explained the residual about as well as the verdict but adds nothing on
+//      top of it is reported with it as an ambiguous pair (the data cannot tell them apart), with
+//      the experiment that would;
+//   6. the corrected prediction of the verdict → locate and test again.
 //
 // An Explainer is the model-specific part: the scenario engine (diagnose.hpp, re-simulating the
 // canal) and the reduced-model engine (model_diagnosis.hpp, refitting a reduced model) implement
@@ -13,7 +19,9 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/progress.hpp"
@@ -44,6 +52,23 @@ struct EffectResult {
   std::string note;              // why it was skipped, if it was
 };
 
+// One effect of an explanation with several effects.
+struct ExplainedEffect {
+  std::string name;
+  ParameterEstimate parameter;   // refitted with the explanation's other effects in place
+  double score = 0.0;            // held-out cost reduction when added to the effects before it
+  double share = 0.0;            // share of the nominal held-out cost it removes
+};
+
+// Two effects the recordings cannot tell apart: each explains the residual about as well as the
+// other, and neither adds to the other.
+struct AmbiguousPair {
+  std::string first, second;     // first = the verdict
+  ParameterEstimate first_parameter, second_parameter;
+  double first_score = 0.0, second_score = 0.0;
+  std::string separating_experiment;
+};
+
 // Per-recording series for plots (primary channel, mm).
 struct RecordingSeries {
   std::string name;
@@ -57,6 +82,8 @@ struct Diagnosis {
   std::string verdict;           // none | unexplained | an effect name
   std::string reason;            // one sentence on how the verdict was reached
   std::vector<EffectResult> effects;   // ranked, best first
+  std::vector<ExplainedEffect> explanation;  // the verdict first, then each effect added; empty without a verdict
+  std::vector<AmbiguousPair> ambiguous;
   Mismatch mismatch;             // of the nominal model
   Mismatch mismatch_after;       // with the winner (equals mismatch when there is none)
   std::vector<ResidualTests> tests_before, tests_after;  // per recording, primary channel
@@ -83,6 +110,11 @@ class Explainer {
   virtual std::vector<RecordingSeries> series_with(const std::string& effect) const = 0;
   // Extra figures of the result (the scenario engine's channel scales).
   virtual void describe(Diagnosis&) const {}
+  // The same recordings against the model that already carries `effects` (name, parameter), for
+  // explanations with several effects; nullptr when the engine cannot stack effects.
+  virtual std::unique_ptr<Explainer> with_effects(const std::vector<std::pair<std::string, double>>& /*effects*/) const {
+    return nullptr;
+  }
 };
 
 struct PipelineSettings {
@@ -90,6 +122,11 @@ struct PipelineSettings {
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;       // share of the candidates explained, and the candidate
+  int max_effects = 3;             // effects in one explanation; 1 = the verdict alone
+  // Candidates tried on top of the verdict: those whose own held-out score reached this.
+  double stack_min_score = 0.05;
+  // A runner-up whose score is within this of the verdict's (and adds nothing on top) is ambiguous.
+  double ambiguity_margin = 0.1;
 };
 
 // Runs the pipeline over `candidates` (names the explainer knows). An InputError propagates; any

@@ -142,7 +142,24 @@ json to_json(const Diagnosis& d) {
   }
   json scales = json::object();
   for (const auto& [c, s] : d.channel_scale) scales[c] = s;
-  json out{{"ok", d.ok}, {"verdict", d.verdict}, {"reason", d.reason}, {"effects", effects},
+  const auto parameter_json = [](const ParameterEstimate& p) {
+    return json{{p.name, {{"value", number(p.value)}, {"std", number(p.std)}, {"unit", p.unit}}}};
+  };
+  json explanation = json::array();
+  for (const auto& e : d.explanation) {
+    explanation.push_back({{"name", e.name}, {"parameters", parameter_json(e.parameter)}, {"score", number(e.score)},
+                           {"share", number(e.share)}});
+  }
+  json ambiguous = json::array();
+  for (const auto& a : d.ambiguous) {
+    ambiguous.push_back({{"effects", {a.first, a.second}},
+                         {"estimates", {{a.first, parameter_json(a.first_parameter)[a.first_parameter.name]},
+                                        {a.second, parameter_json(a.second_parameter)[a.second_parameter.name]}}},
+                         {"scores", {number(a.first_score), number(a.second_score)}},
+                         {"separating_experiment", a.separating_experiment}});
+  }
+  json out{{"ok", d.ok}, {"verdict", d.verdict}, {"reason", d.reason}, {"explanation", explanation},
+           {"ambiguous", ambiguous}, {"effects", effects},
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
            {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
            {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
@@ -157,6 +174,20 @@ std::string text_summary(const Diagnosis& d) {
     return s.str();
   }
   s << "verdict: " << d.verdict << "  (" << d.reason << ")\n";
+  if (d.explanation.size() > 1) {
+    s << "explanation:";
+    for (const auto& e : d.explanation) {
+      s << "  " << e.name << " (" << e.parameter.name << " " << format_estimate(e.parameter.value, e.parameter.std) << " "
+        << e.parameter.unit << ", removes " << fixed(100.0 * e.share, 0) << "%)";
+    }
+    s << '\n';
+  }
+  for (const auto& a : d.ambiguous) {
+    s << "ambiguous: " << a.first << " (" << format_estimate(a.first_parameter.value, a.first_parameter.std) << " "
+      << a.first_parameter.unit << ") or " << a.second << " (" << format_estimate(a.second_parameter.value, a.second_parameter.std)
+      << " " << a.second_parameter.unit << ") explain the residual about equally; to tell them apart: "
+      << a.separating_experiment << '\n';
+  }
   s << "noise " << fixed(d.noise, 3) << " mm, nominal residual RMS " << fixed(d.nominal_rms, 3)
     << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n\n";
   // The name column fits the longest effect name (upstream_level_variation is 24 characters).

@@ -51,6 +51,7 @@ class Engine final : public Explainer {
   std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override;
   std::vector<RecordingSeries> series_with(const std::string& effect) const override;
   void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
+  std::unique_ptr<Explainer> with_effects(const std::vector<std::pair<std::string, double>>& effects) const override;
 
  private:
   void prepare();
@@ -63,6 +64,9 @@ class Engine final : public Explainer {
   // levels next to gate-position glitches).
   double balanced(const Costs& c, bool heldout) const;
   Channels simulate_true(const Scenario& s, const Prepared& p);
+  // The scenario that replays recording i: the base with the carried lateral outflow, whose
+  // reference is the inflow of the engine that found it.
+  Scenario scenario_for(std::size_t i) const;
   std::vector<Channels> predict(Effect effect, double theta);
   Point evaluate(Effect effect, double theta);
   std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
@@ -77,11 +81,14 @@ class Engine final : public Explainer {
   EffectResult unchanged(Effect effect) const;
   EffectResult judge(Effect effect, Point best, int sims);
   double parameter_std(Effect effect, const Point& best) const;
+  bool beyond_calibration(Effect effect, double parameter) const;
   double lattice_resolution() const;
   double reading_spread(double resolution) const;
   double heldout_coherence(double r) const;
 
-  const Scenario& base_;
+  Scenario base_;                    // with the effects an explanation carries (with_effects)
+  double carried_lateral_ = 0.0;     // lateral_outflow carried, fraction of carried_inflow_m3s_
+  std::vector<double> carried_inflow_m3s_;
   const std::vector<Recording>& recordings_;
   const DiagnoseOptions& o_;
   std::vector<Prepared> recs_;

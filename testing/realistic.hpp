@@ -5,7 +5,7 @@
 //
 //   independent_truth()  the same canal simulated differently: more cells, the other limiter, a
 //                        smaller Courant number, optionally the paper's simple gate laws (eqs.
-//                        9, 11) instead of Swamee's;
+//                        9, 11) instead of Swamee's (scenarios/variation.hpp);
 //   realistic_levels()   level sensors as loggers have them: an offset, a drift, noise,
 //                        quantisation on a lattice that does not pass through zero, sampling
 //                        instants that jitter, and a time offset (either sign) between the
@@ -22,35 +22,14 @@
 #include "core/laws.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::testing {
 
-struct TruthVariation {
-  int cells_factor = 4;           // cells of every pool multiplied by this
-  bool swap_limiter = true;       // van Leer <-> minmod
-  double cfl = 0.45;              // Courant number of the truth
-  bool simple_gate_laws = false;  // the paper's eqs. 9/11 with a discharge coefficient
-  double simple_discharge_coefficient = 0.6;
-};
-
-inline scenarios::Scenario independent_truth(scenarios::Scenario s, const TruthVariation& v = {}) {
-  for (auto& pool : s.pools) {
-    pool.cells *= v.cells_factor;
-    pool.design_depth_m.clear();  // per-cell design profiles belong to the old grid
-    pool.design_discharge_m3s.clear();
-  }
-  if (v.swap_limiter) s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter;
-  s.numerics.cfl = v.cfl;
-  if (v.simple_gate_laws) {
-    const auto simplify = [&](scenarios::GateSpec& g) {
-      g.law = scenarios::GateLaw::simple;
-      g.discharge_coefficient = v.simple_discharge_coefficient;
-    };
-    if (s.head_gate) simplify(*s.head_gate);
-    for (auto& g : s.gates) simplify(g);
-  }
-  return s;
-}
+// The numerics of the truth (more cells, another limiter and Courant number, the simple gate
+// laws) live in the library, where the realistic blind test uses them too.
+using scenarios::TruthVariation;
+using scenarios::independent_truth;
 
 struct SensorRealism {
   double offset_mm = 0.0;          // added to every level

@@ -1,0 +1,33 @@
+// What a calibration leaves open, in the units of the catalog's effects (issue 13: "an effect is
+// material only where it exceeds what the calibration leaves open"). A scenario calibrated on a
+// baseline (calibration/calibrate.hpp) knows its discharge coefficients, roughness, downstream
+// setting and sensor offsets only to within their standard deviations; an effect that moves one
+// of them by less than a few of those is the calibration's own tolerance, not a change of the canal.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "diagnosis/catalog.hpp"
+#include "scenarios/scenario.hpp"
+
+namespace canalsim::diagnosis {
+
+// One standard deviation of `effect`'s departure from "no effect", in the unit of its parameter
+// (for the multipliers: of the multiplier; for friction: of log n), that the calibration leaves
+// open; 0 when no calibrated parameter maps onto the effect.
+//   discharge_coefficient   relative std of cd_free / cd_submerged (the larger)
+//   gate_leakage            that relative std × the mean operating opening [mm]
+//   lateral_outflow         that relative std (a share of the inflow, like the flow's own error)
+//   friction                relative std of manning_n (the largest over pools)
+//   downstream_gate         std of downstream_opening_mm
+//   sensor_offset           std of offset_mm and offset_y_dwe_mm combined (the primary sensor)
+//   sensor_delay            std of sensor_delay_s
+//   gate_rate_limit, sensor_quantization: 0 (not calibrated)
+double calibration_uncertainty(Effect effect, const scenarios::Scenario& calibrated,
+                               const std::map<std::string, double>& calibrated_std, double operating_opening_mm);
+
+// |parameter − no effect| in the measure calibration_uncertainty() uses.
+double departure(Effect effect, double parameter);
+
+}  // namespace canalsim::diagnosis

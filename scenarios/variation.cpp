@@ -1,0 +1,75 @@
+#include "scenarios/variation.hpp"
+
+#include "core/format.hpp"
+
+namespace canalsim::scenarios {
+namespace {
+
+double uniform_within(std::mt19937_64& rng, double tolerance) {
+  return tolerance > 0.0 ? std::uniform_real_distribution<double>(-tolerance, tolerance)(rng) : 0.0;
+}
+
+void note(std::string* drawn, const std::string& line) {
+  if (drawn) *drawn += (drawn->empty() ? "" : "; ") + line;
+}
+
+}  // namespace
+
+Scenario independent_truth(Scenario s, const TruthVariation& v) {
+  for (auto& pool : s.pools) {
+    pool.cells *= v.cells_factor;
+    pool.design_depth_m.clear();  // per-cell design profiles belong to the old grid
+    pool.design_discharge_m3s.clear();
+  }
+  if (v.swap_limiter) s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter;
+  s.numerics.cfl = v.cfl;
+  if (v.simple_gate_laws) {
+    const auto simplify = [&](GateSpec& g) {
+      g.law = GateLaw::simple;
+      g.discharge_coefficient = v.simple_discharge_coefficient;
+    };
+    if (s.head_gate) simplify(*s.head_gate);
+    for (auto& g : s.gates) simplify(g);
+  }
+  return s;
+}
+
+Scenario perturb_uncertain(Scenario s, const UncertainTolerances& t, std::mt19937_64& rng, std::string* drawn) {
+  if (s.head_gate) {
+    GateSpec& g = *s.head_gate;
+    const double free_factor = 1.0 + uniform_within(rng, t.discharge_coefficient);
+    const double submerged_factor = 1.0 + uniform_within(rng, t.discharge_coefficient);
+    const double submerged = g.submerged_coefficient();
+    g.discharge_coefficient *= free_factor;
+    g.submerged_discharge_coefficient = submerged * submerged_factor;
+    note(drawn, "cd_free x" + format_fixed(free_factor, 3) + ", cd_submerged x" + format_fixed(submerged_factor, 3));
+  }
+  for (std::size_t i = 0; i < s.pools.size(); ++i) {
+    const double factor = 1.0 + uniform_within(rng, t.manning_n);
+    s.pools[i].manning_n *= factor;
+    std::string name = "manning_n";
+    if (s.pools.size() > 1) name += '.' + std::to_string(i + 1);  // the calibration's names
+    note(drawn, name + " x" + format_fixed(factor, 3));
+  }
+  if (s.downstream.kind == DownstreamKind::gate) {
+    const double opening_mm = uniform_within(rng, t.downstream_opening_mm);
+    s.downstream.gate.opening_m += 1e-3 * opening_mm;
+    note(drawn, "downstream_opening_mm " + format_fixed(opening_mm, 3));
+    if (s.downstream.tail_level_m > 0.0) {
+      const double tail_mm = uniform_within(rng, t.tail_level_mm);
+      s.downstream.tail_level_m += 1e-3 * tail_mm;
+      note(drawn, "tail_level_mm " + format_fixed(tail_mm, 3));
+    }
+  }
+  SensorSpec& sensors = s.sensors;
+  for (auto [name, offset] : {std::pair{"offset_y_up_mm", &sensors.offset_y_up_mm},
+                              std::pair{"offset_y_dw_mm", &sensors.offset_y_dw_mm},
+                              std::pair{"offset_y_dwe_mm", &sensors.offset_y_dwe_mm}}) {
+    const double d = uniform_within(rng, t.level_offset_mm);
+    *offset += d;
+    note(drawn, std::string(name) + " " + format_fixed(d, 3));
+  }
+  return s;
+}
+
+}  // namespace canalsim::scenarios
