@@ -125,11 +125,29 @@ struct SimulationResult {
 SimulationResult simulate(const Model& model, const ExperimentData& data,
                           const SimulationOptions& options = {});
 
+// The input deviation Δu = x_up − u0 after the rate limit of `actuation` (undelayed).
+std::vector<double> input_deviation(const ExperimentData& data, const Actuation& actuation);
+
+// The integer-order models (LIOM, SOPD, NLIOM-*, and the fractional ones at λ = 1 exactly) are
+// simulated by the exact zero-order-hold discretisation (zoh.hpp); the others by GL (gl.hpp),
+// whose output is stamped at the end of each step (the level at t_k is GL's x_{k−1}).
+bool is_integer_order(const Model& model);
+
+// For a linear time-invariant model: the response to a delay of (d + frac) samples is (1 − w)
+// y^{(d)} + w y^{(d+1)} (responses delayed by whole samples) with the returned w — frac for GL
+// and the integrators, zoh_delay_weight for the ZOH lag; nullopt when no such blend is exact
+// (SOPD's two modes, the nonlinear models).
+std::optional<double> delay_interpolation_weight(const Model& model, double h, double frac);
+
 // The input Δu delayed by L seconds (linear interpolation between samples; zero before t = 0),
 // after the rate limit of `actuation`.
 std::vector<double> delayed_input(const ExperimentData& data, const Actuation& actuation, double L);
 
 // Delays a sequence by L/h samples with linear interpolation (zero before the start).
 void fractional_delay(const std::vector<double>& x, double delay_samples, std::vector<double>& out);
+// Delays by floor(delay_samples) whole samples and blends with the next one with weight `frac`:
+// out_k = (1 − frac) x_{k−d} + frac x_{k−d−1}.
+void blended_delay(const std::vector<double>& x, double delay_samples, double frac,
+                   std::vector<double>& out);
 
 }  // namespace canalsim::reduced
