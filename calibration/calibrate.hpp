@@ -13,21 +13,26 @@
 //      coefficients), Jacobians by forward differences whose perturbed simulations run in
 //      parallel (core/parallel.hpp); sensor-only parameters re-observe one simulation instead.
 //      Several starts — the scenario's values and the best of points spread over the bounds —
-//      the best kept.
+//      the best kept; a further start scouts with a loose tolerance and is continued only when it
+//      leads below the best so far.
 //   4. Statistics as PEST and parmest give them: covariance s² (JᵀJ)⁻¹ inflated by N / N_eff for
 //      residual autocorrelation (integrated autocorrelation time per series), standard deviations, correlations, composite
 //      scaled sensitivities, identifiability in words, fit per recording and channel before and
 //      after, on the fitted and the validation recordings, and the grid check (the residual on a
 //      grid with twice the cells at the optimum).
+//   5. The numerical uncertainty (calibration/discretisation.hpp): the optimum re-estimated on
+//      twice the cells, the other limiter and half the Courant number; added to the std.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "calibration/discretisation.hpp"
 #include "calibration/parameters.hpp"
 #include "calibration/replay.hpp"
 #include "core/progress.hpp"
 #include "core/recording.hpp"
+#include "core/status.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::calibration {
@@ -38,13 +43,19 @@ struct CalibrateOptions {
   // The replay: recorded upstream level on, every sample after the initial state compared, and
   // each recording started from the steady state at its own first level.
   ReplayOptions replay = default_replay();
-  int starts = 2;            // Levenberg–Marquardt runs (the scenario's values first); 1..10
+  int starts = 2;            // Levenberg–Marquardt runs at most (the scenario's values first); 1..10
+  // Run the further starts only when the first optimum is doubtful: not converged, at a bound,
+  // a weighted cost per sample above 0.05, a parameter not determined or with a relative std
+  // above 50 % (Calibration::starts_note says which). Off: always run them.
+  bool further_starts_only_when_doubtful = true;
   int screened_points = 6;   // points spread over the bounds whose cost picks the other starts; >= 0
   int max_iterations = 30;   // per run; 1..500
   int threads = 2;           // simulations in parallel; 1..64
-  bool grid_check = true;    // re-simulate the optimum with twice the cells
+  // The grid check and the numerical uncertainty: re-estimate the optimum on other numerics
+  // (discretisation.hpp; 6 simulations per recording, two of them on twice the cells).
+  bool grid_check = true;
   ProgressCallback progress;
-  [[nodiscard]] std::string validate() const;
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
   static ReplayOptions default_replay();
 };
 
@@ -53,8 +64,9 @@ struct ParameterEstimate {
   double key_scale = 1.0;
   double start = 0.0, value = 0.0;
   // One standard deviation, +inf when the data do not determine it: the statistical one and the
-  // grid's (how far the estimate moves on twice the cells, 0 without the grid check) combined in
-  // quadrature.
+  // numerical one (`grid_shift`: how far the estimate moves on other numerics — twice the cells
+  // counted twice, the other limiter, half the Courant number — in quadrature; 0 without the
+  // grid check) combined in quadrature.
   double std = 0.0;
   double statistical_std = 0.0, grid_shift = 0.0;
   double low = 0.0, high = 0.0;
@@ -101,13 +113,21 @@ struct Calibration {
   std::vector<Identifiability> identifiability;
   std::vector<ChannelFit> fits;
   GridCheck grid;
+  // The optimum re-estimated on other numerics (twice the cells, the other limiter, half the
+  // Courant number; discretisation.hpp); empty without the grid check.
+  std::vector<DiscretisationShift> discretisation;
   std::vector<Series> series;
   double cost_before = 0.0, cost_after = 0.0;   // weighted cost per sample (fitted recordings)
   double inflation = 1.0;    // N / N_eff of the residuals at the optimum
   std::size_t samples = 0;   // residuals in the fit
   int simulations = 0, iterations = 0, starts = 0;
+  std::string starts_note;   // why further starts ran, or why not
   double seconds = 0.0;
   std::string solver_report; // Ceres' one-line summary of the best run
+  // The simulations' warnings, the first per recording (a failed steady state: the replay then
+  // starts from time marching, and the warning names that state). Each was also passed to
+  // options.replay.warning, or printed on stderr when it is unset.
+  std::vector<std::string> warnings;
   scenarios::Scenario calibrated;
 };
 

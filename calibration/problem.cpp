@@ -127,6 +127,8 @@ std::vector<std::vector<double>> ReplayProblem::residual_series(const std::vecto
 }
 
 std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const std::vector<double>& r0) {
+  // The statistics ask again for the Jacobian Levenberg–Marquardt took at its last point.
+  if (z == cached_jacobian_z_) return cached_jacobian_;
   const std::size_t p = parameters_.size(), n = replays_.size();
   std::vector<double> J(rows_ * p, 0.0);
   std::vector<double> steps(p);
@@ -152,6 +154,8 @@ std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const 
     residuals_of(i, prediction, r.data());
     for (std::size_t k = 0; k < r.size(); ++k) J[(first + k) * p + j] = (r[k] - r0[first + k]) / steps[j];
   });
+  cached_jacobian_z_ = z;
+  cached_jacobian_ = J;
   return J;
 }
 

@@ -63,6 +63,7 @@ class ReplayProblem {
   std::mutex cache_mutex_;
   std::vector<double> cached_z_;
   std::vector<Channels> cached_truth_;
+  std::vector<double> cached_jacobian_z_, cached_jacobian_;   // the last Jacobian (not thread-safe)
 };
 
 }  // namespace canalsim::calibration

@@ -37,12 +37,16 @@ std::string text_summary(const Calibration& c) {
   std::size_t w = 9;
   for (const auto& p : c.parameters) w = std::max(w, p.name.size() + 2);
   out << pad("parameter", w) << lpad("start", 12) << lpad("estimate", 12) << "  " << pad("± std", 16)
-      << pad("bounds", 22) << "unit\n";
+      << pad("(numerics)", 12) << pad("bounds", 22) << "unit\n";
   for (const auto& p : c.parameters) {
     out << pad(p.name, w) << lpad(value_text(p.start), 12) << lpad(value_text(p.value), 12) << "  "
-        << pad(std::string("± ").append(std_text(p)), 16)
+        << pad(std::string("± ").append(std_text(p)), 16) << pad(c.grid.done ? format_g(p.grid_shift, 2) : "-", 12)
         << pad(std::string("[").append(format_g(p.low, 4)).append(", ").append(format_g(p.high, 4)).append("]"), 22) << p.unit
         << (p.at_bound ? "  (at a bound)" : "") << "\n";
+  }
+  if (c.grid.done) {
+    out << "(numerics: the part of the std that is how far the estimates move on other numerics — twice the\n"
+           " cells (counted twice, Richardson), the other limiter, half the Courant number)\n";
   }
   if (!c.identifiability.empty()) {
     out << "\nnot identifiable from these recordings:\n";
@@ -73,6 +77,7 @@ std::string text_summary(const Calibration& c) {
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
+  if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
   return out.str();
 }
 
@@ -85,7 +90,8 @@ nlohmann::json to_json(const Calibration& c) {
   j["parameters"] = json::array();
   for (const auto& p : c.parameters) {
     j["parameters"].push_back({{"name", p.name}, {"unit", p.unit}, {"key", p.key}, {"start", p.start},
-                               {"value", p.value}, {"std", number(p.std)}, {"low", p.low}, {"high", p.high},
+                               {"value", p.value}, {"std", number(p.std)}, {"statistical_std", number(p.statistical_std)},
+                               {"numerical_std", p.grid_shift}, {"low", p.low}, {"high", p.high},
                                {"at_bound", p.at_bound}, {"sensitivity", p.sensitivity}});
   }
   json corr = json::array();
@@ -110,12 +116,18 @@ nlohmann::json to_json(const Calibration& c) {
                        {"rms_change_mm", c.grid.rms_change}, {"residual_rms_mm", c.grid.residual_rms},
                        {"verdict", c.grid.verdict}};
   }
+  j["discretisation"] = json::array();
+  for (const auto& d : c.discretisation) {
+    j["discretisation"].push_back({{"numerics", d.name}, {"weight", d.weight}, {"shift", d.shift}, {"cost", d.cost}});
+  }
+  j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;
   j["cost_after"] = c.cost_after;
   j["autocorrelation_inflation"] = c.inflation;
   j["samples"] = c.samples;
   j["simulations"] = c.simulations;
   j["starts"] = c.starts;
+  j["starts_note"] = c.starts_note;
   j["iterations"] = c.iterations;
   j["seconds"] = c.seconds;
   j["solver"] = c.solver_report;

@@ -262,8 +262,8 @@ void run_fit(const FitArguments& args) {
   options.threads = args.threads;
   options.progress = progress.callback();
   apply_bounds_and_start(args, kind, options.bounds);
-  if (const auto why = options.validate(); !why.empty()) {
-    throw InputError((args.bounds.empty() && args.start.empty() ? "" : "--bounds/--start: ") + why);
+  if (const Status status = options.validate(); !status) {
+    throw InputError((args.bounds.empty() && args.start.empty() ? "" : "--bounds/--start: ") + status.message());
   }
 
   // Per-recording fits.

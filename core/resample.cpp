@@ -45,16 +45,15 @@ double kernel(double tau, double fc, double half) {
 
 }  // namespace
 
-std::string ResampleOptions::validate() const {
-  if (!(period_s > 0.0) || !std::isfinite(period_s)) {
-    return "period: " + format_g(period_s) + " s, expected a positive number of seconds";
-  }
-  return "";
+Status ResampleOptions::validate() const {
+  return Validator()
+      .require(period_s > 0.0 && std::isfinite(period_s), "period_s", period_s, "a positive number of seconds")
+      .status();
 }
 
 Recording resample(const Recording& in, const ResampleOptions& options) {
   const std::string source = in.source.empty() ? "recording" : in.source;
-  if (const auto why = options.validate(); !why.empty()) throw InputError(source + ": " + why);
+  if (const Status status = options.validate(); !status) throw InputError(source + ": " + status.message());
   const auto& t = in.column(columns::time);
   if (t.size() < 2) throw InputError(source + ": expected at least two samples to resample");
   const double P = options.period_s;

@@ -16,13 +16,14 @@
 #include <vector>
 
 #include "core/recording.hpp"
+#include "core/status.hpp"
 
 namespace canalsim {
 
 struct ResampleOptions {
   double period_s = 0.0;
   std::vector<std::string> held_columns = {columns::gate_command, columns::regime};
-  std::string validate() const;  // empty when valid, else one line naming the field
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
 };
 
 // The recording on t_0 + k P, k = 0 … while ≤ the last time stamp; metadata kept, with

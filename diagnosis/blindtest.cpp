@@ -75,8 +75,7 @@ Status RealisticTruth::validate() const {
                                    std::pair{"level_offset_mm", tolerances.level_offset_mm}}) {
     check.require(value >= 0.0 && value <= 10.0, std::string("tolerances.") + key, value, "[0, 10]");
   }
-  const std::string calibration_problem = calibration.validate();
-  check.require(calibration_problem.empty(), "calibration", calibration_problem);
+  check.nested("calibration", calibration.validate());
   return check.status();
 }
 

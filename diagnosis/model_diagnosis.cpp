@@ -90,6 +90,11 @@ class ModelEngine {
   }
 
   const std::vector<ExperimentData>& data() const { return data_; }
+
+  // A gain in mm/mm times gain_factor() is in the recordings' declared units, gain_unit() (as
+  // `canalsim fit` reports K, data.hpp); recordings that declare different units keep mm/mm.
+  double gain_factor() const { return same_declared_units() ? reduced::declared_gain_factor(data_.front()) : 1.0; }
+  std::string gain_unit() const { return same_declared_units() ? reduced::declared_gain_unit(data_.front()) : "mm/mm"; }
   const std::vector<std::vector<double>>& regimes() const { return regime_; }
   const std::vector<Split>& splits() const { return split_; }
   const Model& nominal() const { return nominal_; }
@@ -196,6 +201,16 @@ class ModelEngine {
   const ModelDiagnoseOptions& options() const { return o_; }
 
  private:
+  bool same_declared_units() const {
+    for (const auto& d : data_) {
+      if (reduced::declared_gain_unit(d) != reduced::declared_gain_unit(data_.front()) ||
+          reduced::declared_gain_factor(d) != reduced::declared_gain_factor(data_.front())) {
+        return false;
+      }
+    }
+    return true;
+  }
+
   const ModelDiagnoseOptions& o_;
   std::vector<ExperimentData> data_, heads_;
   std::vector<std::vector<double>> regime_;
@@ -378,7 +393,8 @@ EffectResult flow_regime_switch(const ModelEngine& e) {
                                      reduced::parameter_names(kind).size());
   const double k = m.p.K == 0.0 ? 1.0 : m.p.K;
   const bool material = std::abs(m.p.K_sub / k - 1.0) >= 0.1 || std::abs(m.p.gamma_sub - m.p.gamma) >= 0.1;
-  return e.judge(kRegime, e.predict(m), std::max(extra, 1), {"K_sub", "mm/mm", m.p.K_sub, 0.0}, material);
+  return e.judge(kRegime, e.predict(m), std::max(extra, 1),
+                 {"K_sub", e.gain_unit(), m.p.K_sub * e.gain_factor(), 0.0}, material);
 }
 
 // Least-squares fit of residual ≈ a z1 + b z2 over the fitted parts; returns (a, b, mse).

@@ -74,14 +74,17 @@ void explain_with_several(Explainer& explainer, const PipelineSettings& settings
       if (auto r = explain_on_top(explainer, values_of(found, e.name), e.name)) e.parameter = r->parameter;
     }
   }
-  // Ambiguity: a significant runner-up about as good as the verdict that adds nothing on top of it.
+  // Ambiguity: a significant runner-up that adds nothing on top of the verdict, while the verdict
+  // adds nothing on top of it either — each explains what the other does.
   for (std::size_t i = 1; i < d.effects.size(); ++i) {
     const EffectResult& r = d.effects[i];
-    if (!r.significant || verdict.score - r.score > settings.ambiguity_margin) continue;
+    if (!r.significant || r.score < settings.ambiguity_share * verdict.score) continue;
     const auto on_top = on_top_of_verdict.find(r.name);
     const bool adds = std::any_of(d.explanation.begin(), d.explanation.end(),
                                   [&](const ExplainedEffect& e) { return e.name == r.name; });
-    if (adds || (on_top != on_top_of_verdict.end() && on_top->second.significant)) continue;
+    if (adds || on_top == on_top_of_verdict.end() || on_top->second.significant) continue;
+    const auto reverse = explain_on_top(explainer, {{r.name, r.parameter.value}}, verdict.name);
+    if (!reverse || reverse->significant) continue;
     d.ambiguous.push_back({verdict.name, r.name, verdict.parameter, r.parameter, verdict.score, r.score,
                            separating_experiment(verdict.name, r.name)});
   }

@@ -8,9 +8,9 @@
 //   5. explanation with several effects (issue 13): against the model corrected by the effects
 //      found so far, the remaining candidates are fitted again and the best one added while its
 //      held-out gain stays significant; every effect is then refitted with the others in place.
-//      A runner-up that explained the residual about as well as the verdict but adds nothing on
-//      top of it is reported with it as an ambiguous pair (the data cannot tell them apart), with
-//      the experiment that would;
+//      A significant runner-up such that neither it adds to the verdict nor the verdict to it is
+//      reported with the verdict as an ambiguous pair (the recordings cannot tell them apart),
+//      with the experiment that would;
 //   6. the corrected prediction of the verdict → locate and test again.
 //
 // An Explainer is the model-specific part: the scenario engine (diagnose.hpp, re-simulating the
@@ -125,8 +125,9 @@ struct PipelineSettings {
   int max_effects = 3;             // effects in one explanation; 1 = the verdict alone
   // Candidates tried on top of the verdict: those whose own held-out score reached this.
   double stack_min_score = 0.05;
-  // A runner-up whose score is within this of the verdict's (and adds nothing on top) is ambiguous.
-  double ambiguity_margin = 0.1;
+  // A significant runner-up whose score reaches this share of the verdict's is ambiguous with it
+  // when neither adds significantly on top of the other.
+  double ambiguity_share = 0.5;
 };
 
 // Runs the pipeline over `candidates` (names the explainer knows). An InputError propagates; any

@@ -4,34 +4,31 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "core/format.hpp"
 
 namespace canalsim::gates {
 namespace {
 constexpr double arrival_tolerance = 1e-12;  // m; far below any gate's resolution
 }  // namespace
 
-std::string ActuatorOptions::validate() const {
-  std::ostringstream out;
-  if (mode != ActuatorMode::ideal && mode != ActuatorMode::rate_limited) {
-    return "mode: expected ideal or rate_limited";
-  }
-  if (!std::isfinite(speed) || speed <= 0.0 || speed > 10.0) {
-    out << "speed: expected a gate speed in (0, 10] m/s, got " << speed;
-  } else if (!std::isfinite(max_opening) || max_opening <= 0.0 || max_opening > 100.0) {
-    out << "max_opening: expected a value in (0, 100] m, got " << max_opening;
-  } else if (!std::isfinite(initial_position) || initial_position < 0.0 ||
-             initial_position > max_opening) {
-    out << "initial_position: expected a value in [0, max_opening = " << max_opening
-        << "] m, got " << initial_position;
-  }
-  return out.str();
+Status ActuatorOptions::validate() const {
+  return Validator()
+      .require(mode == ActuatorMode::ideal || mode == ActuatorMode::rate_limited, "mode",
+               "expected ideal or rate_limited")
+      .require(std::isfinite(speed) && speed > 0.0 && speed <= 10.0, "speed", speed, "a gate speed in (0, 10] m/s")
+      .require(std::isfinite(max_opening) && max_opening > 0.0 && max_opening <= 100.0, "max_opening", max_opening,
+               "a value in (0, 100] m")
+      .require(std::isfinite(initial_position) && initial_position >= 0.0 && initial_position <= max_opening,
+               "initial_position", initial_position, "a value in [0, max_opening = " + format_g(max_opening) + "] m")
+      .status();
 }
 
 GateActuator::GateActuator(const ActuatorOptions& options) : options_(options) {
-  const std::string problem = options.validate();
-  if (!problem.empty()) throw std::invalid_argument("gate actuator: " + problem);
+  if (const Status status = options.validate(); !status) {
+    throw std::invalid_argument("gate actuator: " + status.message());
+  }
   position_ = options.initial_position;
 }
 

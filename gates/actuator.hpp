@@ -13,6 +13,8 @@
 
 #include <string>
 
+#include "core/status.hpp"
+
 namespace canalsim::gates {
 
 enum class ActuatorMode {
@@ -29,8 +31,8 @@ struct ActuatorOptions {
   double max_opening = 0.050;
   double initial_position = 0.0;  // [m], range [0, max_opening]
 
-  // Empty when valid; otherwise one line naming the field and its allowed range.
-  [[nodiscard]] std::string validate() const;
+  // Ok, or one line naming the field and its allowed range (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 class GateActuator {

@@ -2,22 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "core/format.hpp"
 
 namespace canalsim::gates {
 namespace {
 
-// "field: expected a value in RANGE, got VALUE" when value is outside [low, high] (or not
-// finite); `open_low` excludes the lower bound.
-std::string check(const char* field, double value, double low, double high, bool open_low,
-                  const char* unit) {
-  const bool ok = std::isfinite(value) && (open_low ? value > low : value >= low) && value <= high;
-  if (ok) return "";
-  std::ostringstream out;
-  out << field << ": expected a value in " << (open_low ? "(" : "[") << low << ", " << high
-      << "] " << unit << ", got " << value;
-  return out.str();
+// Finite and in [low, high]; `open_low` excludes the lower bound.
+bool in_range(double value, double low, double high, bool open_low) {
+  return std::isfinite(value) && (open_low ? value > low : value >= low) && value <= high;
 }
 
 }  // namespace
@@ -31,35 +25,29 @@ const char* to_string(AntiWindup scheme) {
   return "unknown";
 }
 
-std::string ReservoirOptions::validate() const {
-  for (const std::string& problem :
-       {check("plan_area", plan_area, 0.0, 1e6, true, "m^2"),
-        check("initial_level", initial_level, 0.0, 100.0, false, "m"),
-        check("setpoint", setpoint, 0.0, 100.0, false, "m"),
-        check("flow_per_hz", flow_per_hz, 0.0, 100.0, true, "m^3/s/Hz"),
-        check("max_frequency", max_frequency, 0.0, 1000.0, true, "Hz"),
-        check("proportional_gain", proportional_gain, 0.0, 1e9, false, "Hz/m"),
-        check("integral_time", integral_time, 0.0, 1e9, true, "s"),
-        check("derivative_time", derivative_time, 0.0, 1e6, false, "s"),
-        check("tracking_time", tracking_time, 0.0, 1e6, true, "s")}) {
-    if (!problem.empty()) return problem;
-  }
-  if (!std::isfinite(min_frequency) || min_frequency < 0.0 || min_frequency >= max_frequency) {
-    std::ostringstream out;
-    out << "min_frequency: expected a value in [0, max_frequency = " << max_frequency
-        << ") Hz, got " << min_frequency;
-    return out.str();
-  }
-  if (anti_windup != AntiWindup::none && anti_windup != AntiWindup::conditional_integration &&
-      anti_windup != AntiWindup::back_calculation) {
-    return "anti_windup: expected none, conditional_integration or back_calculation";
-  }
-  return "";
+Status ReservoirOptions::validate() const {
+  return Validator()
+      .require(in_range(plan_area, 0.0, 1e6, true), "plan_area", plan_area, "a value in (0, 1e+06] m^2")
+      .require(in_range(initial_level, 0.0, 100.0, false), "initial_level", initial_level, "a value in [0, 100] m")
+      .require(in_range(setpoint, 0.0, 100.0, false), "setpoint", setpoint, "a value in [0, 100] m")
+      .require(in_range(flow_per_hz, 0.0, 100.0, true), "flow_per_hz", flow_per_hz, "a value in (0, 100] m^3/s/Hz")
+      .require(in_range(max_frequency, 0.0, 1000.0, true), "max_frequency", max_frequency, "a value in (0, 1000] Hz")
+      .require(in_range(proportional_gain, 0.0, 1e9, false), "proportional_gain", proportional_gain,
+               "a value in [0, 1e+09] Hz/m")
+      .require(in_range(integral_time, 0.0, 1e9, true), "integral_time", integral_time, "a value in (0, 1e+09] s")
+      .require(in_range(derivative_time, 0.0, 1e6, false), "derivative_time", derivative_time,
+               "a value in [0, 1e+06] s")
+      .require(in_range(tracking_time, 0.0, 1e6, true), "tracking_time", tracking_time, "a value in (0, 1e+06] s")
+      .require(std::isfinite(min_frequency) && min_frequency >= 0.0 && min_frequency < max_frequency,
+               "min_frequency", min_frequency, "a value in [0, max_frequency = " + format_g(max_frequency) + ") Hz")
+      .require(anti_windup == AntiWindup::none || anti_windup == AntiWindup::conditional_integration ||
+                   anti_windup == AntiWindup::back_calculation,
+               "anti_windup", "expected none, conditional_integration or back_calculation")
+      .status();
 }
 
 Reservoir::Reservoir(const ReservoirOptions& options) : options_(options) {
-  const std::string problem = options.validate();
-  if (!problem.empty()) throw std::invalid_argument("reservoir: " + problem);
+  if (const Status status = options.validate(); !status) throw std::invalid_argument("reservoir: " + status.message());
   volume_ = options.initial_level * options.plan_area;
   initial_volume_ = volume_;
   previous_level_ = options.initial_level;

@@ -27,6 +27,8 @@
 
 #include <string>
 
+#include "core/status.hpp"
+
 namespace canalsim::gates {
 
 enum class AntiWindup {
@@ -55,8 +57,8 @@ struct ReservoirOptions {
   AntiWindup anti_windup = AntiWindup::back_calculation;
   double tracking_time = 1.0;              // T_t [s] for back-calculation, range (0, 1e6]
 
-  // Empty when valid; otherwise one line naming the field and its allowed range.
-  [[nodiscard]] std::string validate() const;
+  // Ok, or one line naming the field and its allowed range (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 class Reservoir {

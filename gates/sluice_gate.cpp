@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 namespace canalsim::gates {
@@ -34,12 +33,6 @@ constexpr double singular_floor = 1e-9;
 // towards zero (a command of 1e-320 mm); such a gate is closed for every physical purpose: it
 // would pass ~1e-12 m²/s.
 constexpr double smallest_opening = 1e-12;  // m
-
-std::string range_problem(const char* field, const char* range, double value) {
-  std::ostringstream out;
-  out << field << ": expected a value in " << range << ", got " << value;
-  return out.str();
-}
 
 bool in_half_open(double value, double low, double high) {  // (low, high]
   return std::isfinite(value) && value > low && value <= high;
@@ -110,24 +103,20 @@ const char* to_string(GateRegime regime) {
   return "unknown";
 }
 
-std::string SluiceGateOptions::validate() const {
-  if (law != GateLaw::swamee && law != GateLaw::simple) return "law: expected swamee or simple";
-  if (!in_half_open(discharge_coefficient_multiplier, 0.0, 10.0)) {
-    return range_problem("discharge_coefficient_multiplier", "(0, 10]",
-                         discharge_coefficient_multiplier);
-  }
-  if (submerged_discharge_coefficient_multiplier != 0.0 && !in_half_open(submerged_discharge_coefficient_multiplier, 0.0, 10.0)) {
-    return range_problem("submerged_discharge_coefficient_multiplier", "0 (= the free one) or (0, 10]",
-                         submerged_discharge_coefficient_multiplier);
-  }
-  if (!in_half_open(simple_discharge_coefficient, 0.0, 2.0)) {
-    return range_problem("simple_discharge_coefficient", "(0, 2]", simple_discharge_coefficient);
-  }
-  if (!std::isfinite(leakage_opening) || leakage_opening < 0.0 || leakage_opening > 1.0) {
-    return range_problem("leakage_opening", "[0, 1] m", leakage_opening);
-  }
-  if (!in_half_open(gravity, 0.0, 100.0)) return range_problem("gravity", "(0, 100] m/s^2", gravity);
-  return "";
+Status SluiceGateOptions::validate() const {
+  const double submerged = submerged_discharge_coefficient_multiplier;
+  return Validator()
+      .require(law == GateLaw::swamee || law == GateLaw::simple, "law", "expected swamee or simple")
+      .require(in_half_open(discharge_coefficient_multiplier, 0.0, 10.0), "discharge_coefficient_multiplier",
+               discharge_coefficient_multiplier, "a value in (0, 10]")
+      .require(submerged == 0.0 || in_half_open(submerged, 0.0, 10.0), "submerged_discharge_coefficient_multiplier",
+               submerged, "0 (= the free one) or a value in (0, 10]")
+      .require(in_half_open(simple_discharge_coefficient, 0.0, 2.0), "simple_discharge_coefficient",
+               simple_discharge_coefficient, "a value in (0, 2]")
+      .require(std::isfinite(leakage_opening) && leakage_opening >= 0.0 && leakage_opening <= 1.0, "leakage_opening",
+               leakage_opening, "a value in [0, 1] m")
+      .require(in_half_open(gravity, 0.0, 100.0), "gravity", gravity, "a value in (0, 100] m/s^2")
+      .status();
 }
 
 double limit_condition_level(double y_dwe, double x_up) { return laws::free_flow_limit_level(y_dwe, x_up); }
@@ -152,8 +141,7 @@ double critical_discharge(double y1, double gravity) {
 }
 
 SluiceGate::SluiceGate(const SluiceGateOptions& options) : options_(options) {
-  const std::string problem = options.validate();
-  if (!problem.empty()) throw std::invalid_argument("sluice gate: " + problem);
+  if (const Status status = options.validate(); !status) throw std::invalid_argument("sluice gate: " + status.message());
   const double r_max = free_flow_shape_argmax(options_);
   reaches_critical_ = free_flow_shape(options_, r_max) >= critical_coefficient;
   cap_ratio_ = reaches_critical_ ? critical_ratio_below(options_, r_max) : r_max;

@@ -55,6 +55,8 @@
 
 #include <string>
 
+#include "core/status.hpp"
+
 namespace canalsim::gates {
 
 inline constexpr double standard_gravity = 9.81;  // m/s^2
@@ -98,8 +100,8 @@ struct SluiceGateOptions {
   double leakage_opening = 0.0;
   double gravity = standard_gravity;  // m/s^2, range (0, 100]
 
-  // Empty when the options are valid; otherwise one line naming the field and its allowed range.
-  [[nodiscard]] std::string validate() const;
+  // Ok, or one line naming the field and its allowed range (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 // Discharge per unit width and its partial derivatives (for the Newton solve of the face state).

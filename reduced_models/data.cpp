@@ -51,21 +51,20 @@ double declared_gain_factor(const ExperimentData& data) {
 
 std::string declared_gain_unit(const ExperimentData& data) { return data.y_unit + "/" + data.u_unit; }
 
-std::string DataOptions::validate() const {
-  if (upstream_level_mm && !(std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0)) {
-    return "DataOptions.upstream_level_mm: " + format_g(*upstream_level_mm) +
-           ", expected a positive level in mm";
-  }
-  if (u0_mm && !std::isfinite(*u0_mm)) return "DataOptions.u0_mm: expected a finite value";
-  if (y0_mm && !std::isfinite(*y0_mm)) return "DataOptions.y0_mm: expected a finite value";
-  if (rest_samples_max < 1) return "DataOptions.rest_samples_max: expected at least 1";
-  if (!(min_excitation_mm >= 0.0)) return "DataOptions.min_excitation_mm: expected >= 0";
-  return "";
+Status DataOptions::validate() const {
+  return Validator()
+      .require(!upstream_level_mm || (std::isfinite(*upstream_level_mm) && *upstream_level_mm > 0.0),
+               "upstream_level_mm", upstream_level_mm.value_or(0.0), "a positive level in mm")
+      .require(!u0_mm || std::isfinite(*u0_mm), "u0_mm", u0_mm.value_or(0.0), "a finite value")
+      .require(!y0_mm || std::isfinite(*y0_mm), "y0_mm", y0_mm.value_or(0.0), "a finite value")
+      .require(rest_samples_max >= 1, "rest_samples_max", static_cast<double>(rest_samples_max), "at least 1")
+      .require(min_excitation_mm >= 0.0, "min_excitation_mm", min_excitation_mm, ">= 0")
+      .status();
 }
 
 ExperimentData prepare_data(const Recording& recording, const DataOptions& options) {
   const std::string source = recording.source.empty() ? "recording" : recording.source;
-  if (const auto why = options.validate(); !why.empty()) throw InputError(source + ": " + why);
+  if (const Status status = options.validate(); !status) throw InputError(source + ": data options: " + status.message());
   ExperimentData d;
   d.source = source;
   d.t_s = recording.column(columns::time);

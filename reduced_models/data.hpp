@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/recording.hpp"
+#include "core/status.hpp"
 
 namespace canalsim::reduced {
 
@@ -30,7 +31,7 @@ struct DataOptions {
   // An input whose range max(u) − min(u) is at most this carries no excitation (rejected).
   double min_excitation_mm = 1e-6;
 
-  std::string validate() const;  // empty when valid, else one line naming the field
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
 };
 
 struct ExperimentData {

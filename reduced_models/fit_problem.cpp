@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <nlopt.hpp>
+#include <stdexcept>
 
 namespace canalsim::reduced::detail {
 
@@ -69,10 +70,12 @@ double Problem::cost(Model& m) {
   std::vector<std::vector<double>> g(data_.size());
   values_.clear();
   weights_.clear();
-  // Linear time-invariant models: the GL recursion and the interpolating delay commute, so the
+  // Linear time-invariant models: a whole-sample delay commutes with the simulation and a
+  // fractional one is a blend of two whole-sample delays (delay_interpolation_weight), so the
   // undelayed unit responses of the last few (T, λ, T2) are cached and only re-delayed when
-  // just L changes (as in BOBYQA's initial design and line steps along L).
-  const bool lti = is_linear_time_invariant(kind_);
+  // just L changes (as in BOBYQA's initial design and line steps along L). SOPD's exact ZOH
+  // delay is no such blend: it is simulated every time (O(n)).
+  const bool lti = is_linear_time_invariant(kind_) && kind_ != ModelKind::sopd;
   const std::vector<std::vector<double>>* undelayed_responses = nullptr;
   if (lti) {
     const std::array<double, 4> key{m.p.T, m.p.lambda, m.p.T2, m.p.Tz};
@@ -104,12 +107,14 @@ double Problem::cost(Model& m) {
   for (std::size_t j = 0; j < data_.size(); ++j) {
     const auto& d = *data_[j];
     if (lti) {
-      fractional_delay((*undelayed_responses)[j], m.p.L / d.h, g[j]);
+      const double delay = m.p.L / d.h, frac = delay - std::floor(delay);
+      blended_delay((*undelayed_responses)[j], delay, *delay_interpolation_weight(unit, d.h, frac), g[j]);
     } else {
       g[j] = simulate(unit, d, options_.simulation).y_dwe_mm;
       ++simulations_;
       for (double& v : g[j]) v -= d.y0_mm;
     }
+    if (least_squares_) continue;
     for (std::size_t k = 0; k < d.size(); ++k) {
       if (g[j][k] != 0.0) {
         values_.push_back(residual_[j][k] / g[j][k]);
@@ -117,6 +122,7 @@ double Problem::cost(Model& m) {
       }
     }
   }
+  if (least_squares_) return least_squares_cost(m, g);
   const auto& spec = options_.bounds.K;
   const double K = values_.empty() ? 0.0 : weighted_median(values_, weights_);
   m.p.K = std::clamp(K, spec.lower, spec.upper);
@@ -131,6 +137,88 @@ double Problem::cost(Model& m) {
     total += s * d.h;
   }
   return total;
+}
+
+void Problem::use_least_squares() {
+  if (!profile_K_) throw std::logic_error("least squares: only for models linear in K");
+  least_squares_ = true;
+}
+
+// min over K and c_j of Σ_j h_j Σ_k (r_jk − c_j − K g_jk)²: c_j = mean_j(r − K g) and K from the
+// centred sums, K = Σ_j h_j Σ (r − r̄_j)(g − ḡ_j) / Σ_j h_j Σ (g − ḡ_j)², clipped to its bounds.
+double Problem::least_squares_cost(Model& m, const std::vector<std::vector<double>>& g) {
+  double cross = 0.0, energy = 0.0;
+  std::vector<double> mean_r(data_.size()), mean_g(data_.size());
+  for (std::size_t j = 0; j < data_.size(); ++j) {
+    const auto n = static_cast<double>(data_[j]->size());
+    double sr = 0.0, sg = 0.0;
+    for (std::size_t k = 0; k < data_[j]->size(); ++k) {
+      sr += residual_[j][k];
+      sg += g[j][k];
+    }
+    mean_r[j] = sr / n;
+    mean_g[j] = sg / n;
+    for (std::size_t k = 0; k < data_[j]->size(); ++k) {
+      const double dg = g[j][k] - mean_g[j];
+      cross += data_[j]->h * (residual_[j][k] - mean_r[j]) * dg;
+      energy += data_[j]->h * dg * dg;
+    }
+  }
+  const auto& spec = options_.bounds.K;
+  m.p.K = std::clamp(energy > 0.0 ? cross / energy : 0.0, spec.lower, spec.upper);
+  const double r = m.actuation.quantum_mm;
+  offsets_.assign(data_.size(), 0.0);
+  for (std::size_t j = 0; j < data_.size(); ++j) offsets_[j] = mean_r[j] - m.p.K * mean_g[j];
+  const bool reading = bias_.lattice.step > 0.0 && r == 0.0;
+  if (reading) gauss_newton_gain_and_offsets(m, g);
+  double total = 0.0, slope = 0.0;
+  for (std::size_t j = 0; j < data_.size(); ++j) {
+    const auto& d = *data_[j];
+    double s = 0.0;
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      const double mu = d.y0_mm + offsets_[j] + m.p.K * g[j][k];
+      const double e = (reading ? mu + bias_(mu, slope) : quantise(mu, r)) - d.y_dwe_mm[k];
+      s += e * e;
+    }
+    total += s * d.h;
+  }
+  return total;
+}
+
+// Gauss–Newton on (K, c_1 … c_J) for the mean reading μ + b(μ), μ = y0_j + c_j + K g: the normal
+// equations are an arrowhead (each c_j only in its recording), solved by the Schur complement.
+void Problem::gauss_newton_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g) {
+  const auto& spec = options_.bounds.K;
+  const std::size_t J = data_.size();
+  std::vector<double> a_kc(J), a_cc(J), b_c(J);
+  double slope = 0.0;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    double a_kk = 0.0, b_k = 0.0;
+    for (std::size_t j = 0; j < J; ++j) {
+      const auto& d = *data_[j];
+      a_kc[j] = a_cc[j] = b_c[j] = 0.0;
+      for (std::size_t k = 0; k < d.size(); ++k) {
+        const double mu = d.y0_mm + offsets_[j] + m.p.K * g[j][k];
+        const double e = d.y_dwe_mm[k] - mu - bias_(mu, slope);
+        const double jc = 1.0 + slope, jk = jc * g[j][k];
+        a_kk += d.h * jk * jk;
+        a_kc[j] += d.h * jk * jc;
+        a_cc[j] += d.h * jc * jc;
+        b_k += d.h * jk * e;
+        b_c[j] += d.h * jc * e;
+      }
+    }
+    double schur = a_kk, rhs = b_k;
+    for (std::size_t j = 0; j < J; ++j) {
+      if (!(a_cc[j] > 0.0)) return;
+      schur -= a_kc[j] * a_kc[j] / a_cc[j];
+      rhs -= a_kc[j] * b_c[j] / a_cc[j];
+    }
+    const double K_new = std::clamp(m.p.K + (schur > 0.0 ? rhs / schur : 0.0), spec.lower, spec.upper);
+    const double dK = K_new - m.p.K;
+    m.p.K = K_new;
+    for (std::size_t j = 0; j < J; ++j) offsets_[j] += (b_c[j] - a_kc[j] * dK) / a_cc[j];
+  }
 }
 
 Model Problem::coarse_starts(const Model& start) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "reduced_models/identification.hpp"
+#include "reduced_models/sensor_reading.hpp"
 
 namespace canalsim::reduced::detail {
 
@@ -43,6 +44,15 @@ class Problem {
 
   // Cost (IAE or IAE_c) of the model `m`; with K profiled, m.p.K is set to the optimal gain.
   double cost(Model& m);
+
+  // Switches the cost to least squares, h Σ (y0_j + c_j + K g − y)², with K and one output
+  // offset c_j per recording profiled out in closed form (models linear in K only).
+  void use_least_squares();
+  // The offsets c_j of the last least-squares evaluation.
+  const std::vector<double>& offsets() const { return offsets_; }
+  // Least squares on the sensor's mean reading y0 + c_j + K g + b(·) (sensor_reading.hpp)
+  // instead of the level itself; K and c_j by three Gauss–Newton steps from the linear solution.
+  void use_reading_bias(const ReadingBias& bias) { bias_ = bias; }
 
   // Stage 1 for a linear model (delay_search.cpp): the cost profiled over every whole-sample
   // delay on a grid of dynamics; returns the best (K, T, λ, T2, L) as the start of refine().
@@ -84,6 +94,11 @@ class Problem {
   std::vector<CacheEntry> cache_;
   unsigned long cache_clock_ = 0;
   std::vector<double> values_, weights_;
+  bool least_squares_ = false;
+  std::vector<double> offsets_;
+  ReadingBias bias_;
+  void gauss_newton_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g);
+  double least_squares_cost(Model& m, const std::vector<std::vector<double>>& g);
 };
 
 // Throws InputError when the recordings or the options cannot be fitted (no recording, invalid
@@ -91,8 +106,9 @@ class Problem {
 void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>& data,
                         const FitOptions& options);
 // The fit result of `model` on `data`: IAE, Nrmse and response per recording.
+// With `offsets` (one per recording), the operating points are y0 + offset.
 FitResult finish(const Model& model, const std::vector<const ExperimentData*>& data,
-                 const SimulationOptions& simulation);
+                 const SimulationOptions& simulation, const std::vector<double>& offsets = {});
 // Refinement from a model's parameters (delay bracket around its L), with the step scale and
 // restart count of Problem::refine.
 FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*>& data,

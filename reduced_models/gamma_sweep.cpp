@@ -18,14 +18,14 @@ std::vector<double> GammaGrid::values() const {
   return out;
 }
 
-std::string GammaGrid::validate() const {
-  if (!std::isfinite(first) || !std::isfinite(last) || !std::isfinite(step)) {
-    return "gamma grid: first, last and step must be finite";
-  }
-  if (!(step > 0.0)) return "gamma grid: step " + format_g(step) + ", expected > 0";
-  if (first > last) return "gamma grid: first " + format_g(first) + " > last " + format_g(last);
-  if ((last - first) / step > 1e5) return "gamma grid: more than 100000 values";
-  return "";
+Status GammaGrid::validate() const {
+  return Validator()
+      .require(std::isfinite(first), "first", first, "a finite value")
+      .require(std::isfinite(last), "last", last, "a finite value")
+      .require(std::isfinite(step) && step > 0.0, "step", step, "a finite value > 0")
+      .require(last >= first, "last", last, ">= first = " + format_g(first))
+      .require(last - first <= 1e5 * step, "step", step, "a step giving at most 100000 values")
+      .status();
 }
 
 GammaGrid GammaGrid::parse(const std::string& text) {
@@ -36,7 +36,7 @@ GammaGrid GammaGrid::parse(const std::string& text) {
       !(in >> std::ws).eof()) {
     throw InputError("--gamma '" + text + "': expected first:last:step, e.g. 0:10:0.05");
   }
-  if (const auto why = g.validate(); !why.empty()) throw InputError("--gamma '" + text + "': " + why);
+  if (const Status status = g.validate(); !status) throw InputError("--gamma '" + text + "': " + status.message());
   return g;
 }
 
@@ -45,8 +45,8 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
   if (!uses_gamma(kind)) {
     throw InputError("gamma sweep: model " + model_name(kind) + " has no gamma parameter");
   }
-  if (const auto why = grid.validate(); !why.empty()) throw InputError(why);
-  if (const auto why = options.validate(); !why.empty()) throw InputError("fit options: " + why);
+  if (const Status status = grid.validate(); !status) throw InputError("gamma grid: " + status.message());
+  if (const Status status = options.validate(); !status) throw InputError("fit options: " + status.message());
   GammaSweep sweep;
   sweep.gamma = grid.values();
   const std::size_t n = sweep.gamma.size();

@@ -147,11 +147,11 @@ void check_arguments(double T, double lambda, double h) {
 
 }  // namespace
 
-std::string GlOptions::validate() const {
-  if (memory == GlMemory::short_memory && memory_terms < 1) {
-    return "GlOptions.memory_terms: must be at least 1 for short memory (paper: 500)";
-  }
-  return "";
+Status GlOptions::validate() const {
+  return Validator()
+      .require(memory != GlMemory::short_memory || memory_terms >= 1, "memory_terms",
+               static_cast<double>(memory_terms), "at least 1 for short memory (paper: 500)")
+      .status();
 }
 
 std::vector<double> gl_weights(double lambda, std::size_t count) {
@@ -167,7 +167,7 @@ std::vector<double> gl_weights(double lambda, std::size_t count) {
 void solve_fractional_lag(std::size_t n, double T, double lambda, double h,
                           const GlOptions& options, const OnlineForcing& forcing, double* x) {
   check_arguments(T, lambda, h);
-  if (const auto why = options.validate(); !why.empty()) throw std::invalid_argument(why);
+  if (const Status status = options.validate(); !status) throw std::invalid_argument("GL options: " + status.message());
   if (n == 0) return;
   const double c = T * std::pow(h, -lambda);
   if (c == 0.0) {

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "core/status.hpp"
+
 namespace canalsim::reduced {
 
 enum class GlMemory {
@@ -39,8 +41,8 @@ struct GlOptions {
   // N: number of past samples kept by the short-memory approximation (paper: 500).
   std::size_t memory_terms = 500;
 
-  // Empty when valid; otherwise one line naming the offending field.
-  std::string validate() const;
+  // Ok, or one line naming the offending field (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 // The first `count` GL weights w_j = (−1)^j binom(λ, j), j = 0 … count−1 (eq. A2).

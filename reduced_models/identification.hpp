@@ -63,8 +63,23 @@ struct FitBounds {
 
 enum class Optimizer { bobyqa, sbplx, nelder_mead };
 
+// What a fit minimises.
+//  iae            the paper's IAE (eq. 20; IAE_c, eq. 21, for a nominal model) throughout — the
+//                 study's tables.
+//  least_squares  the IAE fit, then a local least-squares polish of it on the recordings with
+//                 the output offset of each recording estimated jointly (its operating point y0,
+//                 which prepare_data takes from the samples before the first command change),
+//                 K and the offsets in closed form, L continuous. Under Gaussian-like noise this
+//                 is the (near-)efficient estimate: a slow pool's delay rests on the first
+//                 millimetres of its rise, where an error of y0 is a delay error
+//                 (docs/reduced-models.md, "Delay precision"). Applies to the models whose output
+//                 is linear in K (LIOM, SOPD, LFOM, NLIOM-F, NLFOM-F, ID, IDZ); the others keep
+//                 the IAE fit.
+enum class Criterion { iae, least_squares };
+
 struct FitOptions {
   FitBounds bounds;
+  Criterion criterion = Criterion::iae;
   // Actuator/sensor effects included in the fitted model (eqs. 16–17); not fitted.
   Actuation actuation;
   // GL memory used while fitting (paper: short memory, N = 500).
@@ -91,9 +106,8 @@ struct FitOptions {
   // Progress of fit_each() and gamma_sweep() (may be empty); called from one thread at a time.
   ProgressCallback progress;
 
-  // Empty when valid; otherwise one line naming the field (e.g. "bounds.T: lower 5 > upper 1
-  // excludes every model").
-  std::string validate() const;
+  // Ok, or one line naming the field (e.g. "bounds.T: lower 5 > upper 1 excludes every model").
+  [[nodiscard]] Status validate() const;
 };
 
 // Fit of one model to one or several recordings (several: a nominal model, IAE_c).
@@ -104,6 +118,11 @@ struct FitResult {
   std::vector<double> nrmse;                 // per recording (eq. 19), %
   std::vector<std::vector<double>> response; // model output per recording, absolute mm
   double iae_total = 0.0;                    // Σ iae (IAE_c, eq. 21)
+  // The operating point of each recording the fit used: the data's y0, or with the
+  // least-squares criterion its jointly fitted value (the responses and metrics use it).
+  std::vector<double> y0_mm;
+  // The minimised criterion: iae_total, or with least squares Σ h Σ (ŷ − y)², mm²·s.
+  double cost_total = 0.0;
   int evaluations = 0;                       // cost evaluations spent
   int simulations = 0;                       // GL simulations spent (all recordings)
   bool converged = true;                     // false: an optimiser stopped on a limit/failure
@@ -126,7 +145,7 @@ FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data
 struct GammaGrid {
   double first = 0.0, last = 10.0, step = 0.05;
   std::vector<double> values() const;
-  std::string validate() const;
+  [[nodiscard]] Status validate() const;  // ok, or one line naming the field ("step = 0: ...")
   // Parses "first:last:step" (e.g. "0:10:0.05"); throws InputError naming the text.
   static GammaGrid parse(const std::string& text);
 };

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "core/recording.hpp"
+#include "reduced_models/zoh.hpp"
 
 namespace canalsim::reduced {
 namespace {
@@ -87,14 +88,12 @@ bool is_integrating(ModelKind kind) { return kind == ModelKind::id || kind == Mo
 bool uses_gamma(ModelKind kind) { return uses_upstream_level(kind); }
 bool is_linear_time_invariant(ModelKind kind) { return !uses_upstream_level(kind); }
 
-std::string Actuation::validate() const {
-  if (!(gate_speed_mm_s >= 0.0) || !std::isfinite(gate_speed_mm_s)) {
-    return "Actuation.gate_speed_mm_s: " + format_g(gate_speed_mm_s) + ", expected >= 0 (0 = off)";
-  }
-  if (!(quantum_mm >= 0.0) || !std::isfinite(quantum_mm)) {
-    return "Actuation.quantum_mm: " + format_g(quantum_mm) + ", expected >= 0 (0 = off)";
-  }
-  return "";
+Status Actuation::validate() const {
+  return Validator()
+      .require(gate_speed_mm_s >= 0.0 && std::isfinite(gate_speed_mm_s), "gate_speed_mm_s", gate_speed_mm_s,
+               ">= 0 (0 = off)")
+      .require(quantum_mm >= 0.0 && std::isfinite(quantum_mm), "quantum_mm", quantum_mm, ">= 0 (0 = off)")
+      .status();
 }
 
 std::vector<std::string> parameter_names(ModelKind kind) {
@@ -139,25 +138,22 @@ void set_parameter(ModelParameters& p, const std::string& name, double value) {
   else throw std::invalid_argument("unknown model parameter '" + name + "'");
 }
 
-std::string validate(const Model& model) {
+Status validate(const Model& model) {
   const auto& p = model.p;
+  Validator check;
   for (const auto& name : parameter_names(model.kind)) {
-    if (!std::isfinite(get_parameter(p, name))) return "parameter " + name + " is not finite";
+    const double value = get_parameter(p, name);
+    check.require(std::isfinite(value), "p." + name, value, "a finite value");
   }
-  if (!(p.T >= 0.0)) return "parameter T: " + format_g(p.T) + " s, expected >= 0";
-  if (model.kind == ModelKind::sopd && !(p.T2 >= 0.0)) {
-    return "parameter T2: " + format_g(p.T2) + " s, expected >= 0";
-  }
-  if (is_fractional(model.kind) && !(p.lambda > 0.0)) {
-    return "parameter lambda: " + format_g(p.lambda) + ", expected > 0";
-  }
-  if (!(p.L >= 0.0)) return "parameter L: " + format_g(p.L) + " s, expected >= 0";
-  if (model.kind == ModelKind::idz && !(p.Tz >= 0.0)) {
-    return "parameter Tz: " + format_g(p.Tz) + " s, expected >= 0";
-  }
-  if (!(p.head_ref_mm >= 0.0)) return "parameter head_ref_mm: expected >= 0 (0 = from data)";
-  if (!(p.head_ref_sub_mm >= 0.0)) return "parameter head_ref_sub_mm: expected >= 0";
-  return model.actuation.validate();
+  return check.require(p.T >= 0.0, "p.T", p.T, ">= 0 s")
+      .require(model.kind != ModelKind::sopd || p.T2 >= 0.0, "p.T2", p.T2, ">= 0 s")
+      .require(!is_fractional(model.kind) || p.lambda > 0.0, "p.lambda", p.lambda, "> 0")
+      .require(p.L >= 0.0, "p.L", p.L, ">= 0 s")
+      .require(model.kind != ModelKind::idz || p.Tz >= 0.0, "p.Tz", p.Tz, ">= 0 s")
+      .require(p.head_ref_mm >= 0.0, "p.head_ref_mm", p.head_ref_mm, ">= 0 (0 = from data)")
+      .require(p.head_ref_sub_mm >= 0.0, "p.head_ref_sub_mm", p.head_ref_sub_mm, ">= 0")
+      .nested("actuation", model.actuation.validate())
+      .status();
 }
 
 double free_flow_limit_mm(double y_dwe_mm, double x_up_mm) { return laws::free_flow_limit_level(y_dwe_mm, x_up_mm); }
@@ -210,11 +206,14 @@ double paper_gain(const Model& model) {
 }
 
 void fractional_delay(const std::vector<double>& x, double delay_samples, std::vector<double>& out) {
+  blended_delay(x, delay_samples, delay_samples - std::floor(delay_samples), out);
+}
+
+void blended_delay(const std::vector<double>& x, double delay_samples, double frac,
+                   std::vector<double>& out) {
   const std::size_t n = x.size();
   out.assign(n, 0.0);
-  const double whole = std::floor(delay_samples);
-  const double frac = delay_samples - whole;
-  const auto d = static_cast<std::ptrdiff_t>(whole);
+  const auto d = static_cast<std::ptrdiff_t>(std::floor(delay_samples));
   // out[k] = (1 − frac) x[k − d] + frac x[k − d − 1]
   for (std::size_t k = 0; k < n; ++k) {
     const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(k) - d;
@@ -225,9 +224,24 @@ void fractional_delay(const std::vector<double>& x, double delay_samples, std::v
   }
 }
 
-std::vector<double> delayed_input(const ExperimentData& data, const Actuation& actuation, double L) {
+std::vector<double> input_deviation(const ExperimentData& data, const Actuation& actuation) {
   std::vector<double> du = rate_limit(data.u_mm, data.h, actuation.gate_speed_mm_s);
   for (double& v : du) v -= data.u0_mm;
+  return du;
+}
+
+bool is_integer_order(const Model& model) {
+  return !is_fractional(model.kind) || model.p.lambda == 1.0;
+}
+
+std::optional<double> delay_interpolation_weight(const Model& model, double h, double frac) {
+  if (is_integrating(model.kind)) return frac;
+  if (model.kind == ModelKind::sopd || !is_linear_time_invariant(model.kind)) return std::nullopt;
+  return is_integer_order(model) ? zoh_delay_weight(model.p.T, h, frac) : frac;
+}
+
+std::vector<double> delayed_input(const ExperimentData& data, const Actuation& actuation, double L) {
+  const std::vector<double> du = input_deviation(data, actuation);
   std::vector<double> out;
   fractional_delay(du, L / data.h, out);
   return out;
@@ -235,10 +249,12 @@ std::vector<double> delayed_input(const ExperimentData& data, const Actuation& a
 
 SimulationResult simulate(const Model& model_in, const ExperimentData& data,
                           const SimulationOptions& options) {
-  if (const auto why = validate(model_in); !why.empty()) {
-    throw std::invalid_argument("simulate " + model_name(model_in.kind) + ": " + why);
+  if (const Status status = validate(model_in); !status) {
+    throw std::invalid_argument("simulate " + model_name(model_in.kind) + ": " + status.message());
   }
-  if (const auto why = options.validate(); !why.empty()) throw std::invalid_argument(why);
+  if (const Status status = options.validate(); !status) {
+    throw std::invalid_argument("simulation options: " + status.message());
+  }
   Model model = model_in;
   const ModelKind kind = model.kind;
   if (uses_upstream_level(kind)) {
@@ -248,63 +264,26 @@ SimulationResult simulate(const Model& model_in, const ExperimentData& data,
   const auto& p = model.p;
   const std::size_t n = data.size();
   const double h = data.h;
-  const auto dud = delayed_input(data, model.actuation, p.L);
   SimulationResult result;
   std::vector<double> x(n, 0.0);
-  const double lambda = is_fractional(kind) ? p.lambda : 1.0;
-
+  const double y0 = data.y0_mm;
+  // The gain of the input term over interval k, given the model's deviation x_k at its start.
+  IntervalGain gain = [&](std::size_t, double) { return p.K; };
   switch (kind) {
-    case ModelKind::liom:
-    case ModelKind::lfom: {
-      const OnlineForcing f = [&](std::size_t k, const double*) { return p.K * dud[k]; };
-      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
-      break;
-    }
-    case ModelKind::sopd: {
-      std::vector<double> x1(n);
-      const OnlineForcing f1 = [&](std::size_t k, const double*) { return p.K * dud[k]; };
-      solve_fractional_lag(n, p.T, 1.0, h, options.gl, f1, x1.data());
-      const OnlineForcing f2 = [&](std::size_t k, const double*) { return x1[k]; };
-      solve_fractional_lag(n, p.T2, 1.0, h, options.gl, f2, x.data());
-      break;
-    }
     case ModelKind::nliom_f:
-    case ModelKind::nlfom_f: {
-      std::vector<double> g(n);
-      for (std::size_t k = 0; k < n; ++k) {
-        g[k] = p.K * std::pow(std::max(data.y_up_mm[k], 0.0) / p.head_ref_mm, p.gamma) * dud[k];
-      }
-      const OnlineForcing f = [&](std::size_t k, const double*) { return g[k]; };
-      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
-      break;
-    }
-    case ModelKind::nliom_s:
-    case ModelKind::nlfom_s: {
-      const double y0 = data.y0_mm;
-      const OnlineForcing f = [&](std::size_t k, const double* xs) {
-        if (dud[k] == 0.0) return 0.0;
-        const double y_dwe = y0 + (k > 0 ? xs[k - 1] : 0.0);
-        const double head = std::max(data.y_up_mm[k] - y_dwe, 0.0);
-        return p.K * std::pow(head / p.head_ref_mm, p.gamma) * dud[k];
+    case ModelKind::nlfom_f:
+      gain = [&](std::size_t k, double) {
+        return p.K * std::pow(std::max(data.y_up_mm[k], 0.0) / p.head_ref_mm, p.gamma);
       };
-      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
       break;
-    }
-    case ModelKind::id:
-    case ModelKind::idz: {
-      // Rectangle rule on the held input: exact for a command held between samples (a delayed
-      // step gives the sampled ramp K A (t − t_step − L) exactly, for any fractional L). IDZ adds
-      // the direct gain K·Tz of its zero (ID: Tz = 0).
-      const double Tz = kind == ModelKind::idz ? p.Tz : 0.0;
-      double integral = 0.0;
-      for (std::size_t k = 0; k < n; ++k) {
-        if (k > 0) integral += h * dud[k - 1];
-        x[k] = p.K * (integral + Tz * dud[k]);
-      }
+    case ModelKind::nliom_s:
+    case ModelKind::nlfom_s:
+      gain = [&](std::size_t k, double x_k) {
+        const double head = std::max(data.y_up_mm[k] - (y0 + x_k), 0.0);
+        return p.K * std::pow(head / p.head_ref_mm, p.gamma);
+      };
       break;
-    }
     case ModelKind::hybrid: {
-      const double y0 = data.y0_mm;
       std::vector<double> gate;
       if (model.actuation.gate_speed_mm_s > 0.0 || data.x_up_mm.empty()) {
         gate = rate_limit(data.u_mm, h, model.actuation.gate_speed_mm_s);
@@ -312,23 +291,58 @@ SimulationResult simulate(const Model& model_in, const ExperimentData& data,
         gate = data.x_up_mm;
       }
       result.regime.assign(n, 0);
-      const OnlineForcing f = [&](std::size_t k, const double* xs) {
-        const double y_dwe = y0 + (k > 0 ? xs[k - 1] : 0.0);
-        const double y_up = data.y_up_mm[k];
+      gain = [&, gate = std::move(gate)](std::size_t k, double x_k) {
+        const double y_dwe = y0 + x_k, y_up = data.y_up_mm[k];
         const bool free = is_free_flow(y_up, y_dwe, gate[k]);
         result.regime[k] = free ? 1 : 0;
-        if (dud[k] == 0.0) return 0.0;
-        if (free) return p.K * std::pow(std::max(y_up, 0.0) / p.head_ref_mm, p.gamma) * dud[k];
-        const double head = std::max(y_up - y_dwe, 0.0);
-        return p.K_sub * std::pow(head / p.head_ref_sub_mm, p.gamma_sub) * dud[k];
+        if (free) return p.K * std::pow(std::max(y_up, 0.0) / p.head_ref_mm, p.gamma);
+        return p.K_sub * std::pow(std::max(y_up - y_dwe, 0.0) / p.head_ref_sub_mm, p.gamma_sub);
       };
-      solve_fractional_lag(n, p.T, lambda, h, options.gl, f, x.data());
       break;
     }
+    default: break;
+  }
+
+  if (is_integrating(kind)) {
+    // Rectangle rule on the held input: exact for a command held between samples (a delayed
+    // step gives the sampled ramp K A (t − t_step − L) exactly, for any fractional L). IDZ adds
+    // the direct gain K·Tz of its zero (ID: Tz = 0).
+    const auto dud = delayed_input(data, model.actuation, p.L);
+    const double Tz = kind == ModelKind::idz ? p.Tz : 0.0;
+    double integral = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k > 0) integral += h * dud[k - 1];
+      x[k] = p.K * (integral + Tz * dud[k]);
+    }
+  } else if (is_integer_order(model)) {
+    const std::vector<double> du = input_deviation(data, model.actuation);
+    const DelayedHold input(du, p.L / h);
+    if (kind == ModelKind::sopd) {
+      solve_zoh_two_lags(input, p.T, p.T2, h, x.data());
+    } else if (is_linear_time_invariant(kind)) {
+      solve_zoh_lag(input, p.T, h, nullptr, x.data());
+    } else {
+      solve_zoh_lag(input, p.T, h, &gain, x.data());
+    }
+    if (is_linear_time_invariant(kind)) {
+      for (double& v : x) v *= p.K;
+    }
+  } else {
+    // Grünwald–Letnikov (gl.hpp). Its step k integrates over [t_k, t_{k+1}] with the input's
+    // mean over that interval (for the held, delayed command: the linear interpolation of the
+    // samples, delayed_input) and its x_k approximates the level at t_{k+1}: the level at t_k is
+    // x_{k−1}, where the submerged models and the hybrid read their own level.
+    const auto dud = delayed_input(data, model.actuation, p.L);
+    std::vector<double> xs(n, 0.0);
+    const OnlineForcing f = [&](std::size_t k, const double* xg) {
+      return gain(k, k > 0 ? xg[k - 1] : 0.0) * dud[k];
+    };
+    solve_fractional_lag(n, p.T, p.lambda, h, options.gl, f, xs.data());
+    for (std::size_t k = 1; k < n; ++k) x[k] = xs[k - 1];
   }
   result.y_dwe_mm.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
-    result.y_dwe_mm[k] = quantise(data.y0_mm + x[k], model.actuation.quantum_mm);
+    result.y_dwe_mm[k] = quantise(y0 + x[k], model.actuation.quantum_mm);
   }
   return result;
 }

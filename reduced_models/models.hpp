@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "core/status.hpp"
 #include "reduced_models/data.hpp"
 #include "reduced_models/gl.hpp"
 
@@ -74,7 +75,7 @@ struct ModelParameters {
 struct Actuation {
   double gate_speed_mm_s = 0.0;  // v in eq. 16; 0 = the gate follows u instantly
   double quantum_mm = 0.0;       // r in eq. 17 (paper: 0.05 mm); 0 = no quantisation
-  std::string validate() const;
+  [[nodiscard]] Status validate() const;
 };
 
 struct Model {
@@ -89,8 +90,8 @@ std::vector<std::string> parameter_names(ModelKind kind);
 double get_parameter(const ModelParameters& p, const std::string& name);
 void set_parameter(ModelParameters& p, const std::string& name, double value);
 
-// Empty when the parameters are usable for `kind`, else one line naming the field.
-std::string validate(const Model& model);
+// Ok when the parameters are usable for `kind`, else one line naming the field ("p.L = -1: ...").
+[[nodiscard]] Status validate(const Model& model);
 
 // Flow regime test of the paper: free when y_up > 0.81 y_dwe (y_dwe / x_up)^0.72 (eq. 8),
 // submerged otherwise (eq. 10; y_up ≤ y_dwe is reported as submerged too).
@@ -110,7 +111,7 @@ double paper_gain(const Model& model);
 
 struct SimulationOptions {
   GlOptions gl;  // short memory with N = 500 by default, as in the paper
-  std::string validate() const { return gl.validate(); }
+  [[nodiscard]] Status validate() const { return Validator().nested("gl", gl.validate()).status(); }
 };
 
 struct SimulationResult {
@@ -124,11 +125,29 @@ struct SimulationResult {
 SimulationResult simulate(const Model& model, const ExperimentData& data,
                           const SimulationOptions& options = {});
 
+// The input deviation Δu = x_up − u0 after the rate limit of `actuation` (undelayed).
+std::vector<double> input_deviation(const ExperimentData& data, const Actuation& actuation);
+
+// The integer-order models (LIOM, SOPD, NLIOM-*, and the fractional ones at λ = 1 exactly) are
+// simulated by the exact zero-order-hold discretisation (zoh.hpp); the others by GL (gl.hpp),
+// whose output is stamped at the end of each step (the level at t_k is GL's x_{k−1}).
+bool is_integer_order(const Model& model);
+
+// For a linear time-invariant model: the response to a delay of (d + frac) samples is (1 − w)
+// y^{(d)} + w y^{(d+1)} (responses delayed by whole samples) with the returned w — frac for GL
+// and the integrators, zoh_delay_weight for the ZOH lag; nullopt when no such blend is exact
+// (SOPD's two modes, the nonlinear models).
+std::optional<double> delay_interpolation_weight(const Model& model, double h, double frac);
+
 // The input Δu delayed by L seconds (linear interpolation between samples; zero before t = 0),
 // after the rate limit of `actuation`.
 std::vector<double> delayed_input(const ExperimentData& data, const Actuation& actuation, double L);
 
 // Delays a sequence by L/h samples with linear interpolation (zero before the start).
 void fractional_delay(const std::vector<double>& x, double delay_samples, std::vector<double>& out);
+// Delays by floor(delay_samples) whole samples and blends with the next one with weight `frac`:
+// out_k = (1 − frac) x_{k−d} + frac x_{k−d−1}.
+void blended_delay(const std::vector<double>& x, double delay_samples, double frac,
+                   std::vector<double>& out);
 
 }  // namespace canalsim::reduced

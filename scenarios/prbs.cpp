@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
 namespace canalsim {
@@ -118,25 +117,19 @@ PrbsDesign design_prbs(int stages, double clock_period) {
   return d;
 }
 
-std::string PrbsOptions::validate() const {
-  std::ostringstream out;
-  if (stages < prbs_min_stages || stages > prbs_max_stages) {
-    out << "stages: expected an integer in [2, 20], got " << stages;
-  } else if (!std::isfinite(clock_period) || clock_period <= 0.0 || clock_period > 3600.0) {
-    out << "clock_period: expected a value in (0, 3600] s, got " << clock_period;
-  } else if (!std::isfinite(amplitude)) {
-    out << "amplitude: expected a finite value, got " << amplitude;
-  } else if (!std::isfinite(operating_point)) {
-    out << "operating_point: expected a finite value, got " << operating_point;
-  } else if (!std::isfinite(start_time)) {
-    out << "start_time: expected a finite value, got " << start_time;
-  }
-  return out.str();
+Status PrbsOptions::validate() const {
+  return Validator()
+      .require(stages >= prbs_min_stages && stages <= prbs_max_stages, "stages", stages, "an integer in [2, 20]")
+      .require(std::isfinite(clock_period) && clock_period > 0.0 && clock_period <= 3600.0, "clock_period",
+               clock_period, "a value in (0, 3600] s")
+      .require(std::isfinite(amplitude), "amplitude", amplitude, "a finite value")
+      .require(std::isfinite(operating_point), "operating_point", operating_point, "a finite value")
+      .require(std::isfinite(start_time), "start_time", start_time, "a finite value")
+      .status();
 }
 
 PrbsSignal::PrbsSignal(const PrbsOptions& options) : options_(options) {
-  const std::string problem = options.validate();
-  if (!problem.empty()) throw std::invalid_argument("PRBS: " + problem);
+  if (const Status status = options.validate(); !status) throw std::invalid_argument("PRBS: " + status.message());
   bits_ = maximal_length_sequence(options.stages, options.seed);
 }
 

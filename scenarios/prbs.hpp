@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/status.hpp"
 #include "scenarios/signals.hpp"
 
 namespace canalsim {
@@ -89,8 +90,8 @@ struct PrbsOptions {
   double start_time = 0.0;      // [s]; bit k covers [start + k Tc, start + (k+1) Tc); finite
   std::uint64_t seed = 1;       // chooses the initial register
 
-  // Empty when valid; otherwise one line naming the field and its allowed range.
-  [[nodiscard]] std::string validate() const;
+  // Ok, or one line naming the field and its allowed range (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 // operating_point + amplitude * (+1 for bit 1, -1 for bit 0), repeating with period N Tc.

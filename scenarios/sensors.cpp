@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 namespace canalsim {
@@ -12,12 +11,6 @@ namespace {
 
 // Slack, in sample periods, for deciding that an observation reached a sample instant.
 constexpr double instant_slack = 1e-9;
-
-std::string outside(const char* field, const char* range, double value) {
-  std::ostringstream out;
-  out << field << ": expected a value in " << range << ", got " << value;
-  return out.str();
-}
 
 bool within(double value, double low, double high) {
   return std::isfinite(value) && value >= low && value <= high;
@@ -41,28 +34,26 @@ SensorOptions SensorOptions::defaults_for(SensorKind kind) {
   return options;
 }
 
-std::string SensorOptions::validate() const {
-  if (kind != SensorKind::level && kind != SensorKind::gate_position && kind != SensorKind::flow) {
-    return "kind: expected level, gate_position or flow";
-  }
-  if (!within(sample_period, 0.0, 3600.0) || sample_period == 0.0) {
-    return outside("sample_period", "(0, 3600] s", sample_period);
-  }
-  if (!within(resolution, 0.0, 100.0)) return outside("resolution", "[0, 100]", resolution);
-  if (!within(noise_std, 0.0, 100.0)) return outside("noise_std", "[0, 100]", noise_std);
-  if (!within(delay, 0.0, 600.0)) return outside("delay", "[0, 600] s", delay);
-  if (!within(offset, -1000.0, 1000.0)) return outside("offset", "[-1000, 1000]", offset);
-  if (!std::isfinite(start_time)) return outside("start_time", "(-inf, inf) s", start_time);
-  return "";
+Status SensorOptions::validate() const {
+  return Validator()
+      .require(kind == SensorKind::level || kind == SensorKind::gate_position || kind == SensorKind::flow, "kind",
+               "expected level, gate_position or flow")
+      .require(within(sample_period, 0.0, 3600.0) && sample_period != 0.0, "sample_period", sample_period,
+               "a value in (0, 3600] s")
+      .require(within(resolution, 0.0, 100.0), "resolution", resolution, "a value in [0, 100]")
+      .require(within(noise_std, 0.0, 100.0), "noise_std", noise_std, "a value in [0, 100]")
+      .require(within(delay, 0.0, 600.0), "delay", delay, "a value in [0, 600] s")
+      .require(within(offset, -1000.0, 1000.0), "offset", offset, "a value in [-1000, 1000]")
+      .require(std::isfinite(start_time), "start_time", start_time, "a finite value in s")
+      .status();
 }
 
 double quantise(double value, double resolution) { return laws::quantise(value, resolution); }
 
 Sensor::Sensor(const SensorOptions& options)
     : options_(options), rng_(options.seed), noise_(0.0, options.noise_std > 0.0 ? options.noise_std : 1.0) {
-  const std::string problem = options.validate();
-  if (!problem.empty()) {
-    throw std::invalid_argument(std::string(to_string(options.kind)) + " sensor: " + problem);
+  if (const Status status = options.validate(); !status) {
+    throw std::invalid_argument(std::string(to_string(options.kind)) + " sensor: " + status.message());
   }
 }
 

@@ -26,6 +26,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/status.hpp"
+
 namespace canalsim {
 
 enum class SensorKind {
@@ -49,8 +51,8 @@ struct SensorOptions {
 
   // Defaults of each kind: level as above; gate position and flow without quantisation.
   static SensorOptions defaults_for(SensorKind kind);
-  // Empty when valid; otherwise one line naming the field and its allowed range.
-  [[nodiscard]] std::string validate() const;
+  // Ok, or one line naming the field and its allowed range (core/status.hpp).
+  [[nodiscard]] Status validate() const;
 };
 
 // Paper eq. (17): r nint(value / r); the value itself when r = 0.

@@ -111,9 +111,7 @@ std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const Drive& drive
     o.proportional_gain = u.pid_kp;
     o.integral_time = u.pid_ti_s;
     o.derivative_time = u.pid_td_s;
-    if (const std::string problem = o.validate(); !problem.empty()) {
-      throw InputError(s.source + ": upstream: " + problem);
-    }
+    if (const Status status = o.validate(); !status) throw InputError(s.source + ": upstream: " + status.message());
     *reservoir = std::make_shared<gates::ReservoirSupply>(o);
     return *reservoir;
   }

@@ -16,8 +16,7 @@ using namespace canalsim::reduced;
 
 Status StudyOptions::validate() const {
   Validator check;
-  const std::string gamma_problem = gamma.validate();
-  check.require(gamma_problem.empty(), "StudyOptions.gamma", gamma_problem);
+  check.nested("StudyOptions.gamma", gamma.validate());
   check.require(gamma.first >= 0.0 && gamma.last <= 50.0, "StudyOptions.gamma", "expected within [0, 50]");
   check.require(threads >= 1, "StudyOptions.threads", "expected at least 1");
   check.require(prbs_clock_s > 0.0 && std::isfinite(prbs_clock_s), "StudyOptions.prbs_clock_s",

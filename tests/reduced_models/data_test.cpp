@@ -73,7 +73,7 @@ TEST(PrepareData, RejectsAnInputWithoutExcitationNamingTheFile) {
 TEST(PrepareData, RejectsInvalidOptionsNamingTheField) {
   DataOptions o;
   o.upstream_level_mm = -3.0;
-  EXPECT_NE(o.validate().find("upstream_level_mm"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("upstream_level_mm"), std::string::npos);
   EXPECT_THROW(prepare_data(recording({15, 20}, {40, 41}), o), InputError);
 }
 

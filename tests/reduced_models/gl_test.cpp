@@ -187,7 +187,7 @@ TEST(GlArguments, RejectsNegativeTimeConstantZeroOrderAndEmptyMemory) {
   EXPECT_THROW(solve_fractional_lag(f, 1.0, 0.5, 0.1, {GlMemory::short_memory, 0}),
                std::invalid_argument);
   const GlOptions bad{GlMemory::short_memory, 0};
-  EXPECT_NE(bad.validate().find("memory_terms"), std::string::npos);
+  EXPECT_NE(bad.validate().message().find("memory_terms"), std::string::npos);
 }
 
 TEST(GlZeroTimeConstant, PassesTheForcingThrough) {

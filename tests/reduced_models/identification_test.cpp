@@ -224,20 +224,20 @@ TEST(QuantisedModelOutput, LfomFitWithTheSensorResolutionInTheModelStillRecovers
 TEST(FitOptionsValidation, BoundsThatExcludeEveryModelAreReportedNamingTheField) {
   FitOptions o;
   o.bounds.T = {5.0, 1.0, std::nullopt, false};
-  EXPECT_NE(o.validate().find("bounds.T: lower 5 > upper 1 excludes every model"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("bounds.T: lower 5 > upper 1 excludes every model"), std::string::npos);
   o = {};
   o.bounds.lambda = {-1.0, 0.0, std::nullopt, false};
-  EXPECT_NE(o.validate().find("bounds.lambda"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("bounds.lambda"), std::string::npos);
   o = {};
   o.bounds.K.initial = 500.0;
-  EXPECT_NE(o.validate().find("not clipped"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("not clipped"), std::string::npos);
   o = {};
   o.bounds.gamma.fixed = true;
-  EXPECT_NE(o.validate().find("bounds.gamma: fixed needs an initial value"), std::string::npos);
+  EXPECT_NE(o.validate().message().find("bounds.gamma: fixed needs an initial value"), std::string::npos);
   o = {};
   o.threads = 0;
-  EXPECT_NE(o.validate().find("threads"), std::string::npos);
-  EXPECT_EQ(FitOptions{}.validate(), "");
+  EXPECT_NE(o.validate().message().find("threads"), std::string::npos);
+  EXPECT_TRUE(FitOptions{}.validate());
 }
 
 TEST(FitOptionsValidation, ADelayBoundLongerThanTheRecordingIsReportedNamingTheFile) {

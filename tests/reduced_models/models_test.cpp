@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "reduced_models/sensor_reading.hpp"
 #include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
@@ -68,6 +69,85 @@ TEST(FractionalDelay, CommutesWithTheGlRecursionForLinearModels) {
   for (std::size_t k = 0; k < d.size(); ++k) {
     ASSERT_NEAR(delayed_input_response[k] - d.y0_mm, delayed_output[k], 1e-12) << k;
   }
+}
+
+// The integer-order models are the continuous ones sampled (exact zero-order hold, zoh.hpp):
+// for a command stepping by A at t_s = k_s h and held, T ẏ + y = K u(t − L) gives exactly
+// y(t) = y0 + K A (1 − e^{−(t − t_s − L)/T}) after t_s + L, at any h/T and any fractional L.
+double fopdt_step(double t, double K, double A, double T, double L) {
+  return t > L ? K * A * (1.0 - std::exp(-(t - L) / T)) : 0.0;
+}
+
+TEST(ExactHold, LiomIsTheContinuousStepResponseSampledAtAnyPeriod) {
+  for (const double h : {0.125, 1.0}) {
+    const std::size_t at = 7;
+    const auto d = step_data(400, h, 5.0, at);
+    Model m{ModelKind::liom, {}, {}};
+    testing::set_parameters(m, {{"K", 0.6}, {"T", 2.3}, {"L", 3.37}});
+    const auto y = simulate(m, d).y_dwe_mm;
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      const double t = static_cast<double>(k) * h - static_cast<double>(at) * h;
+      ASSERT_NEAR(y[k] - 40.0, fopdt_step(t, 0.6, 5.0, 2.3, 3.37), 1e-12) << "h " << h << " k " << k;
+    }
+  }
+}
+
+// Two lags in series, y(t) = K A (1 − (T e^{−τ/T} − T2 e^{−τ/T2})/(T − T2)), τ = t − t_s − L
+// (T = T2: 1 − (1 + τ/T) e^{−τ/T}).
+TEST(ExactHold, SopdIsTheContinuousStepResponseSampled) {
+  const double h = 0.5, K = 1.7, A = 2.0, L = 1.3;
+  const std::size_t at = 4;
+  const auto d = step_data(200, h, A, at);
+  for (const auto& [T, T2] : {std::pair{3.0, 0.8}, std::pair{2.0, 2.0}, std::pair{2.0, 2.0 + 1e-9}}) {
+    Model m{ModelKind::sopd, {}, {}};
+    testing::set_parameters(m, {{"K", K}, {"T", T}, {"T2", T2}, {"L", L}});
+    const auto y = simulate(m, d).y_dwe_mm;
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      const double tau = static_cast<double>(k) * h - static_cast<double>(at) * h - L;
+      double expected = 0.0;
+      if (tau > 0.0) {
+        // (a difference of 1e-9 s is the repeated pole to 1e-9; the two-pole formula would lose
+        // seven digits to cancellation there)
+        expected = std::abs(T - T2) < 1e-6 ? 1.0 - (1.0 + tau / T) * std::exp(-tau / T)
+                           : 1.0 - (T * std::exp(-tau / T) - T2 * std::exp(-tau / T2)) / (T - T2);
+      }
+      ASSERT_NEAR(y[k] - 40.0, K * A * expected, 1e-9) << "T " << T << " T2 " << T2 << " k " << k;
+    }
+  }
+}
+
+// The nesting LFOM ⊃ LIOM holds exactly: LFOM at λ = 1 is the integer model, not GL's backward
+// Euler (which is h/2 slower and reads one sample early; GL is kept for λ ≠ 1).
+TEST(ExactHold, LfomAtOrderOneIsLiom) {
+  const auto d = step_data(500, 0.13, 2.0, 20);
+  Model liom{ModelKind::liom, {}, {}};
+  testing::set_parameters(liom, {{"K", 1.3}, {"T", 1.1}, {"L", 0.77}});
+  Model lfom = liom;
+  lfom.kind = ModelKind::lfom;
+  lfom.p.lambda = 1.0;
+  EXPECT_EQ(simulate(lfom, d).y_dwe_mm, simulate(liom, d).y_dwe_mm);
+  // Near λ = 1 GL is close to it (no one-sample jump in the delay between the two schemes).
+  lfom.p.lambda = 0.999;
+  const auto gl = simulate(lfom, d).y_dwe_mm, zoh = simulate(liom, d).y_dwe_mm;
+  for (std::size_t k = 0; k < d.size(); ++k) EXPECT_NEAR(gl[k], zoh[k], 0.05 * 2.6) << k;
+}
+
+// The fitter re-delays a cached LIOM response by blending two whole-sample delays with the
+// ZOH weight (delay_interpolation_weight): exact, not an approximation.
+TEST(ExactHold, AFractionalDelayIsABlendOfTwoWholeSampleDelays) {
+  const auto d = step_data(300, 0.4, 2.0, 10);
+  Model m{ModelKind::liom, {}, {}};
+  testing::set_parameters(m, {{"K", 1.3}, {"T", 0.9}, {"L", 2.3}});
+  const auto direct = simulate(m, d).y_dwe_mm;
+  Model undelayed = m;
+  undelayed.p.L = 0.0;
+  auto g = simulate(undelayed, d).y_dwe_mm;
+  for (double& v : g) v -= d.y0_mm;
+  const double delay = m.p.L / d.h, frac = delay - std::floor(delay);
+  std::vector<double> blended;
+  blended_delay(g, delay, *delay_interpolation_weight(m, d.h, frac), blended);
+  for (std::size_t k = 0; k < d.size(); ++k) ASSERT_NEAR(direct[k] - d.y0_mm, blended[k], 1e-12) << k;
+  EXPECT_FALSE(delay_interpolation_weight(Model{ModelKind::sopd, {}, {}}, d.h, frac).has_value());
 }
 
 TEST(Sopd, IsTwoCascadedFirstOrderLagsWithUnitStaticGainTimesK) {
@@ -193,13 +273,55 @@ TEST(Hybrid, SwitchesBetweenTheFreeAndSubmergedTermsByTheFlowCondition) {
 TEST(ModelValidation, NamesTheOffendingParameter) {
   Model m{ModelKind::lfom, {}, {}};
   m.p.lambda = -0.5;
-  EXPECT_NE(validate(m).find("lambda"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("lambda"), std::string::npos);
   m.p.lambda = 0.5;
   m.p.L = -1.0;
-  EXPECT_NE(validate(m).find("parameter L"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("p.L"), std::string::npos);
   m.p.L = 0.0;
   m.actuation.quantum_mm = -0.05;
-  EXPECT_NE(validate(m).find("quantum_mm"), std::string::npos);
+  EXPECT_NE(validate(m).message().find("quantum_mm"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canalsim::reduced
+
+namespace canalsim::reduced {
+namespace {
+
+// The mean reading of a quantising sensor, Σ_j q_j P(bin j), summed directly over the bins.
+double direct_mean_reading(double mu, double r, double o, double sigma) {
+  double mean = 0.0;
+  const double centre = o + r * std::round((mu - o) / r);
+  for (int j = -30; j <= 30; ++j) {
+    const double q = centre + j * r;
+    const double p = 0.5 * (std::erfc(-(q + 0.5 * r - mu) / (sigma * std::sqrt(2.0))) -
+                            std::erfc(-(q - 0.5 * r - mu) / (sigma * std::sqrt(2.0))));
+    mean += q * p;
+  }
+  return mean;
+}
+
+TEST(SensorReading, TheBiasSeriesIsTheMeanReadingSummedOverTheBins) {
+  for (const double ratio : {0.08, 0.2, 0.3, 0.6}) {
+    const ReadingBias bias{{0.1, 0.037}, ratio * 0.1};
+    for (double mu = 44.9; mu < 45.1; mu += 0.0071) {
+      double slope = 0.0;
+      EXPECT_NEAR(mu + bias(mu, slope), direct_mean_reading(mu, 0.1, 0.037, ratio * 0.1), 1e-7) << ratio << " " << mu;
+      double up = 0.0, down = 0.0;
+      const double numeric = (bias(mu + 1e-6, up) - bias(mu - 1e-6, down)) / 2e-6;
+      EXPECT_NEAR(slope, numeric, 1e-4);
+    }
+  }
+}
+
+TEST(SensorReading, TheLatticeOfQuantisedLevelsIsFoundAndContinuousLevelsHaveNone) {
+  ExperimentData d;
+  for (int k = 0; k < 500; ++k) d.y_dwe_mm.push_back(0.037 + 0.1 * std::round(450.0 + 30.0 * std::sin(0.01 * k)));
+  const auto lattice = recorded_lattice({&d});
+  EXPECT_NEAR(lattice.step, 0.1, 1e-9);
+  EXPECT_NEAR(lattice.origin, 0.037, 1e-6);
+  for (int k = 0; k < 500; ++k) d.y_dwe_mm[static_cast<std::size_t>(k)] = 45.0 + 3.0 * std::sin(0.0123 * k);
+  EXPECT_EQ(recorded_lattice({&d}).step, 0.0);
 }
 
 }  // namespace

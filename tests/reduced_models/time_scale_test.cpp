@@ -1,9 +1,11 @@
 // Identification at any time scale (issue 14): first-order-plus-delay step responses written in
 // closed form, y(t) = y0 + K A (1 − e^{−(t − t_step − L)/T}) after t_step + L, with noise and a
 // sensor that quantises with an offset, sampled at 0.125 s and at 0.01 s, for time constants of
-// 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 % and L
-// within two samples with the default options. The models nested in others never fit better
-// than the models containing them.
+// 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 %; L
+// within two samples wherever the Cramér–Rao bound allows it (two samples ≥ 3 bound std), else
+// within 3 bound std, with the least-squares criterion (DelayPrecision.*, the bound computed
+// independently in crb.hpp); the paper's IAE fit (the default) within max(2 samples, T/250). The
+// models nested in others never fit better than the models containing them.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +15,7 @@
 #include <random>
 
 #include "reduced_models/frequency.hpp"
+#include "tests/reduced_models/crb.hpp"
 #include "reduced_models/identification.hpp"
 #include "testing/synthetic.hpp"
 
@@ -49,11 +52,13 @@ Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
   return rec;
 }
 
-// K and T within 5 %; L within two samples, or T/250 when that is longer: the sensor cannot
-// see a delay finer than that on a slow pool (for T = 300 s the level moves 0.008 mm in 0.25 s,
-// under the 0.03 mm noise and 0.1 mm resolution; the IAE optimum itself lies 0.1–0.3 s from the
-// true delay for T = 300 s and 0.12 s for T = 60 s at 0.01 s sampling). That the search is not
-// trapped is shown by the IAE: at most 2 % above that of the true model (often below it).
+// The paper's IAE fit: K and T within 5 %; L within two samples, or T/250 when that is longer.
+// The IAE estimate of L is less precise than least squares' (Monte Carlo over 20 seeds at
+// 0.01 s: rms error 0.05 s for T = 60 s and 0.25–0.28 s for T = 300 s, against Cramér–Rao bounds
+// of 0.01–0.025 s and 0.036–0.12 s; docs/reduced-models.md, "Delay precision"): the L1 cost is
+// statistically less efficient, y0 is taken from the 40 samples before the step instead of being
+// fitted, and the quantised readings bias it. That the search is not trapped is shown by the IAE:
+// at most 2 % above that of the true model (often below it).
 void expect_fopdt_recovered(const StepTest& s) {
   SCOPED_TRACE("T " + std::to_string(s.T) + " s, L " + std::to_string(s.L) + " s, h " +
                std::to_string(s.h) + " s");
@@ -81,6 +86,105 @@ TEST(TimeScale, FopdtStepResponsesAreRecoveredAtTenMillisecondSampling) {
   for (const StepTest s : {StepTest{2.0, 2.0, 1.5, 0.01}, StepTest{2.0, 20.0, 12.0, 0.01},
                            StepTest{2.0, 60.0, 0.5, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01}}) {
     expect_fopdt_recovered(s);
+  }
+}
+
+// ---- Delay precision: the Cramér–Rao bound (crb.hpp) and the least-squares polish ----------
+
+// The bound on the delay of the recording fopdt_step_recording(s) makes, with the operating
+// point y0 estimated jointly with K, T and L (prepare_data takes y0 from the samples before the
+// step: no estimator knows it).
+double delay_bound(const StepTest& s) {
+  testing_crb::FopdtExperiment e{s.K, s.T, s.L};
+  e.h = s.h;
+  e.t_step = static_cast<double>(s.step_sample) * s.h;
+  e.n = fopdt_step_recording(s).column("t_s").size();
+  return testing_crb::crb_std(e, true)(2);
+}
+
+// L within two samples where the bound allows it (two samples ≥ 3 bound std), else within
+// 3 bound std; K and T within 5 %.
+void expect_delay_at_the_bound(const StepTest& s) {
+  const double bound = delay_bound(s), tolerance = std::max(2.0 * s.h, 3.0 * bound);
+  SCOPED_TRACE("T " + std::to_string(s.T) + " s, L " + std::to_string(s.L) + " s, h " + std::to_string(s.h) +
+               " s: CRB std of L " + std::to_string(bound) + " s");
+  FitOptions o;
+  o.criterion = Criterion::least_squares;
+  const auto r = fit(ModelKind::liom, prepare_data(fopdt_step_recording(s)), o);
+  EXPECT_NEAR(r.model.p.K, s.K, 0.05 * s.K);
+  EXPECT_NEAR(r.model.p.T, s.T, 0.05 * s.T);
+  EXPECT_NEAR(r.model.p.L, s.L, tolerance);
+}
+
+// Where two samples are at least three bound std, L is recovered within two samples: every
+// case at 0.125 s up to T = 60 s, at 0.01 s the fast pools and T = 20 s with L ≥ 3 s.
+TEST(DelayPrecision, TheDelayIsWithinTwoSamplesWhereTheCramerRaoBoundAllowsIt) {
+  for (const StepTest s : {StepTest{2.0, 2.0, 0.5, 0.125}, StepTest{2.0, 20.0, 3.0, 0.125},
+                           StepTest{2.0, 60.0, 12.0, 0.125}, StepTest{1.3, 60.0, 0.5, 0.125},
+                           StepTest{2.0, 2.0, 12.0, 0.01}, StepTest{2.0, 20.0, 3.0, 0.01},
+                           StepTest{2.0, 20.0, 12.0, 0.01}}) {
+    EXPECT_LE(3.0 * delay_bound(s), 2.0 * s.h);
+    expect_delay_at_the_bound(s);
+  }
+}
+
+// Where the bound is wider than two samples (slow pools: the level leaves y0 at K A/T mm/s, under
+// the 0.03 mm noise and 0.1 mm resolution), L is recovered within three bound std.
+TEST(DelayPrecision, ASlowPoolsDelayIsWithinThreeCramerRaoStdWhereThatIsWiderThanTwoSamples) {
+  for (const StepTest s : {StepTest{2.0, 300.0, 0.5, 0.125}, StepTest{2.0, 300.0, 12.0, 0.125},
+                           StepTest{2.0, 20.0, 0.5, 0.01}, StepTest{2.0, 60.0, 0.5, 0.01},
+                           StepTest{2.0, 60.0, 12.0, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01},
+                           StepTest{2.0, 300.0, 12.0, 0.01}}) {
+    EXPECT_GT(3.0 * delay_bound(s), 2.0 * s.h);
+    expect_delay_at_the_bound(s);
+  }
+}
+
+// The bound's ingredients: a fine quantiser loses no information (1/σ² per sample), a coarse one
+// loses some on average over the level; and the unknown operating point widens the delay's bound.
+TEST(DelayPrecision, TheBoundsIngredientsBehaveAsTheTheorySays) {
+  EXPECT_NEAR(testing_crb::sample_information(45.01, 0.03, 0.001, 0.0), 1.0 / (0.03 * 0.03), 1e-3 / (0.03 * 0.03));
+  double mean = 0.0;
+  for (int i = 0; i < 100; ++i) mean += testing_crb::sample_information(45.0 + 0.001 * i, 0.03, 0.1, 0.037) / 100.0;
+  EXPECT_LT(mean, 1.0 / (0.03 * 0.03));
+  testing_crb::FopdtExperiment e{2.0, 20.0, 3.0};
+  e.h = 0.01;
+  e.t_step = 0.4;
+  e.n = 12000;
+  e.quantum = 0.0;
+  const double known_y0 = testing_crb::crb_std(e, false)(2), unknown_y0 = testing_crb::crb_std(e, true)(2);
+  EXPECT_LT(known_y0, unknown_y0);
+  e.sigma *= 2.0;  // without a quantiser the bound scales with the noise
+  EXPECT_NEAR(testing_crb::crb_std(e, true)(2), 2.0 * unknown_y0, 1e-9 * unknown_y0);
+}
+
+// Coarse sampling does not bias the fit: the exact zero-order hold (zoh.hpp) makes the LIOM the
+// continuous model sampled, so a clean closed-form response at 0.125 s and at 1 s (backward
+// Euler read it one sample late with T low by h/2) gives L within a tenth of a sample and T
+// within 1 %.
+TEST(TimeScale, CoarseSamplingDoesNotBiasTheDelayOrTheTimeConstant) {
+  for (const double h : {0.125, 1.0}) {
+    for (const double T : {3.0, 20.0}) {
+      SCOPED_TRACE("h " + std::to_string(h) + " s, T " + std::to_string(T) + " s");
+      const double L = 3.3, K = 2.0, A = 5.0, t_step = 10.0 * h;
+      const auto n = static_cast<std::size_t>((t_step + L + 8.0 * T) / h);
+      std::vector<double> t(n), u(n), y(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        t[k] = static_cast<double>(k) * h;
+        u[k] = k >= 10 ? 20.0 + A : 20.0;
+        const double since = t[k] - t_step - L;
+        y[k] = 45.0 + (since > 0.0 ? K * A * (1.0 - std::exp(-since / T)) : 0.0);
+      }
+      Recording rec;
+      rec.source = "clean.csv";
+      rec.set_column("t_s", t);
+      rec.set_column("u_mm", u);
+      rec.set_column("y_dwe_mm", y);
+      const auto r = fit(ModelKind::liom, prepare_data(rec));
+      EXPECT_NEAR(r.model.p.L, L, 0.1 * h);
+      EXPECT_NEAR(r.model.p.T, T, 0.01 * T);
+      EXPECT_NEAR(r.model.p.K, K, 0.01 * K);
+    }
   }
 }
 
@@ -195,6 +299,29 @@ TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
       {ModelKind::nlfom_s, ModelKind::liom}};
   for (const auto& [outer, inner] : pairs) {
     EXPECT_LE(iae[outer], iae[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
+  }
+}
+
+// The same under the least-squares criterion (its sum of squares, with the fitted offsets and the
+// sensor's mean reading), for the models it polishes.
+TEST(NestedModels, UnderLeastSquaresAModelNeverFitsWorseThanAModelItContains) {
+  Model truth{ModelKind::sopd, {}, {}};
+  testing::set_parameters(truth, {{"K", 0.8}, {"T", 3.0}, {"T2", 0.8}, {"L", 2.5}});
+  testing::SyntheticSpec spec;
+  spec.n = 1500;
+  spec.y_up_swing = 8.0;
+  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  FitOptions o;
+  o.criterion = Criterion::least_squares;
+  std::map<ModelKind, double> cost;
+  for (auto kind : {ModelKind::liom, ModelKind::lfom, ModelKind::nliom_f, ModelKind::nlfom_f}) {
+    cost[kind] = fit(kind, data, o).cost_total;
+  }
+  const std::vector<std::pair<ModelKind, ModelKind>> pairs = {
+      {ModelKind::lfom, ModelKind::liom}, {ModelKind::nliom_f, ModelKind::liom},
+      {ModelKind::nlfom_f, ModelKind::nliom_f}, {ModelKind::nlfom_f, ModelKind::lfom}};
+  for (const auto& [outer, inner] : pairs) {
+    EXPECT_LE(cost[outer], cost[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
   }
 }
 

@@ -136,15 +136,15 @@ TEST(SensorOptions, DefaultsPerKind) {
 
 TEST(SensorOptions, ValidationNamesTheFieldAndRange) {
   SensorOptions options;
-  EXPECT_EQ(options.validate(), "");
+  EXPECT_TRUE(options.validate());
   options.sample_period = 0.0;
-  EXPECT_EQ(options.validate(), "sample_period: expected a value in (0, 3600] s, got 0");
+  EXPECT_EQ(options.validate().message(), "sample_period = 0: expected a value in (0, 3600] s");
   options = {};
   options.noise_std = -1.0;
-  EXPECT_EQ(options.validate(), "noise_std: expected a value in [0, 100], got -1");
+  EXPECT_EQ(options.validate().message(), "noise_std = -1: expected a value in [0, 100]");
   options = {};
   options.delay = 700.0;
-  EXPECT_EQ(options.validate(), "delay: expected a value in [0, 600] s, got 700");
+  EXPECT_EQ(options.validate().message(), "delay = 700: expected a value in [0, 600] s");
   EXPECT_THROW(Sensor{options}, std::invalid_argument);
 }
 

@@ -1,0 +1,94 @@
+#include "calibration/discretisation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+
+#include "calibration/statistics.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+using scenarios::Scenario;
+
+struct Alternative {
+  const char* name;
+  double weight;
+  std::function<void(Scenario&)> edit;
+};
+
+const std::vector<Alternative>& alternatives() {
+  static const std::vector<Alternative> list = {
+      {"twice the cells", 2.0, [](Scenario& s) {
+         for (auto& pool : s.pools) {
+           pool.cells *= 2;
+           pool.design_depth_m.clear();  // per-cell profiles belong to the old grid
+           pool.design_discharge_m3s.clear();
+         }
+       }},
+      {"the other limiter", 1.0, [](Scenario& s) { s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter; }},
+      {"half the Courant number", 1.0, [](Scenario& s) { s.numerics.cfl *= 0.5; }},
+  };
+  return list;
+}
+
+std::vector<double> clamp_to_bounds(const std::vector<Parameter>& parameters, std::vector<double> z) {
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    const double lo = parameters[j].to_search(parameters[j].low), hi = parameters[j].to_search(parameters[j].high);
+    z[j] = std::clamp(z[j], std::min(lo, hi), std::max(lo, hi));
+  }
+  return z;
+}
+
+double cost_per_sample(const std::vector<double>& r) {
+  return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
+}
+
+// Gauss–Newton with the Jacobian of the optimum held fixed: z_{k+1} = z_k + argmin |r_alt(z_k) + J δ|.
+DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double>& z, const std::vector<double>& J,
+                                const Alternative& a, int iterations) {
+  const auto& parameters = problem.parameters();
+  DiscretisationShift out;
+  out.name = a.name;
+  out.weight = a.weight;
+  std::vector<double> zk = z;
+  for (int k = 0; k < iterations; ++k) {
+    Scenario s = problem.scenario_at(zk);
+    a.edit(s);
+    const std::vector<Channels> prediction = problem.predict(s);
+    const std::vector<double> r = problem.residuals(prediction);
+    if (k == 0) {
+      out.at_optimum = prediction;
+      out.cost = cost_per_sample(r);
+    }
+    const std::vector<double> step = optimum_shift(J, r, parameters.size());
+    for (std::size_t j = 0; j < zk.size(); ++j) zk[j] += step[j];
+    zk = clamp_to_bounds(parameters, zk);
+  }
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    out.shift.push_back(parameters[j].from_search(zk[j]) - parameters[j].from_search(z[j]));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<DiscretisationShift> discretisation_shifts(ReplayProblem& problem, const std::vector<double>& z,
+                                                       const std::vector<double>& jacobian, int iterations) {
+  std::vector<DiscretisationShift> out;
+  for (const Alternative& a : alternatives()) out.push_back(re_estimate(problem, z, jacobian, a, iterations));
+  return out;
+}
+
+std::vector<double> numerical_uncertainty(const std::vector<DiscretisationShift>& shifts, std::size_t parameters) {
+  std::vector<double> u(parameters, 0.0);
+  for (std::size_t j = 0; j < parameters; ++j) {
+    double sum = 0.0;
+    for (const auto& s : shifts) sum += (s.weight * s.shift[j]) * (s.weight * s.shift[j]);
+    u[j] = std::sqrt(sum);
+  }
+  return u;
+}
+
+}  // namespace canalsim::calibration
