@@ -48,11 +48,18 @@ struct DiagnoseArguments {
 
 // Stops at the first unreadable recording: its error names the file and line, and the next
 // file's problem (or a "no recordings" that only follows from the first) would be noise.
-// In millimetres: a command or levels logged in other units (# u_unit, # u_scale_mm_per_unit;
-// docs/recording-format.md) are converted here, so every check and fit sees mm.
 std::vector<Recording> read_all(const std::vector<std::string>& files) {
   std::vector<Recording> recordings;
-  for (const auto& file : files) recordings.push_back(in_millimetres(read_recording(file)));
+  for (const auto& file : files) recordings.push_back(read_recording(file));
+  return recordings;
+}
+
+// For a scenario, in millimetres: a command or levels logged in other units (# u_unit,
+// # u_scale_mm_per_unit; docs/recording-format.md) are converted here, so every check sees mm.
+// (A reduced model keeps the declared units: it reports its gain in them.)
+std::vector<Recording> read_all_in_mm(const std::vector<std::string>& files) {
+  std::vector<Recording> recordings = read_all(files);
+  for (Recording& r : recordings) r = in_millimetres(std::move(r));
   return recordings;
 }
 
@@ -150,7 +157,7 @@ diagnosis::DiagnoseOptions diagnose_options(const DiagnoseArguments& args) {
 // against the calibrated scenario. Every check (baseline against recordings, both against the
 // scenario) runs before the calibration, and nothing is written unless both steps succeed.
 int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>& recordings, const DiagnoseArguments& args) {
-  const std::vector<Recording> baseline = read_all(args.baseline);
+  const std::vector<Recording> baseline = read_all_in_mm(args.baseline);
   if (const auto problems = diagnosis::check_baseline(baseline, recordings); !problems.empty()) {
     throw InputError(problems.front());
   }
@@ -192,7 +199,7 @@ int run(const DiagnoseArguments& args) {
   if (!args.model.empty()) return run_model(args);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   // One line for the first problem (it names the recording); the user reruns to see the next.
-  const std::vector<Recording> recordings = read_all(args.recordings);
+  const std::vector<Recording> recordings = read_all_in_mm(args.recordings);
   if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
   }

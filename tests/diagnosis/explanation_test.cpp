@@ -106,7 +106,7 @@ TEST(Explanation, LeakAndDischargeCoefficientAtOneOpeningAreAnAmbiguousPair) {
 // named against an uncalibrated scenario, and not against one whose downstream opening is known
 // only to ± 0.5 mm (3 σ = 1.5 mm).
 TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
-  const auto recordings = record({{"downstream_gate", 0.8}}, {"op1", "op3"});
+  const auto recordings = record({{"downstream_gate", 0.8}}, {"op1", "op3"}, 120.0);
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   DiagnoseOptions o = options({"downstream_gate", "sensor_offset"});
   const Diagnosis uncalibrated = diagnose(lab, recordings, o);
