@@ -209,14 +209,19 @@ Channels replay_true(const Scenario& scenario, const Replay& p, const ReplayOpti
   so.warning = o.warning;
   so.step_to_command_changes = o.step_to_command_changes;
   const Recording r = scenarios::simulate(s, e, so);
-  Channels out;
-  for (const auto& [c, y] : p.data) {
-    if (!r.has(c)) continue;
+  const auto at_recording_samples = [&](const std::string& c) {
     const std::vector<double>& all = r.column(c);
     std::vector<double> v(all.begin() + static_cast<std::ptrdiff_t>(std::min(p.skip, all.size())), all.end());
     v.resize(p.n, v.empty() ? 0.0 : v.back());
-    out[c] = std::move(v);
+    return v;
+  };
+  Channels out;
+  for (const auto& [c, y] : p.data) {
+    if (r.has(c)) out[c] = at_recording_samples(c);
   }
+  // The modelled flow through the controlled gate even where it was not recorded (a laboratory
+  // logs levels): the diagnosis scales a lateral outflow by it. Costs compare recorded channels only.
+  if (!out.count(columns::discharge) && r.has(columns::discharge)) out[columns::discharge] = at_recording_samples(columns::discharge);
   return out;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -73,6 +74,19 @@ std::map<std::string, double> calibrated_std(const calibration::Calibration& cal
   return out;
 }
 
+// RMS of the primary channel's residual over the baseline after calibration [mm].
+double baseline_rms(const calibration::Calibration& cal, const std::string& primary) {
+  double sq = 0.0;
+  int n = 0;
+  for (const auto& f : cal.fits) {
+    if (f.channel == primary && !f.validation) {
+      sq += f.rms_after * f.rms_after;
+      ++n;
+    }
+  }
+  return n ? std::sqrt(sq / n) : 0.0;
+}
+
 // The realistic trial (blindtest.hpp): a perturbed truth simulated differently, a clean baseline
 // of it calibrated on, the trial's recordings diagnosed against the calibrated scenario.
 Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
@@ -104,6 +118,7 @@ Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
   if (!cal.ok) throw std::runtime_error("baseline calibration failed: " + cal.message);
   DiagnoseOptions options = c.diagnose;
   options.calibrated_std = calibrated_std(cal);
+  options.baseline_rms_mm = baseline_rms(cal, options.primary);
   return diagnose(cal.calibrated, recordings, options);
 }
 

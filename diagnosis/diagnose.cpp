@@ -411,6 +411,8 @@ Status DiagnoseOptions::validate() const {
   check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");
   check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
   check.require(calibrated_z > 0.0, "calibrated_z", calibrated_z, "> 0");
+  check.require(baseline_rms_mm >= 0.0, "baseline_rms_mm", baseline_rms_mm, ">= 0");
+  check.require(baseline_factor > 0.0, "baseline_factor", baseline_factor, "> 0");
   for (const auto& [name, sd] : calibrated_std) {
     check.require(sd >= 0.0, "calibrated_std." + name, sd, ">= 0 (a standard deviation)");
   }
@@ -441,7 +443,13 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
     for (const auto& e : catalog()) candidates.emplace_back(e.name);
   }
   scenario_engine::Engine engine(scenario, recordings, options);
-  return run_pipeline(engine, candidates, {options.none_noise_factor, options.tests, options.locate, options.progress});
+  PipelineSettings settings;
+  settings.none_noise_factor = options.none_noise_factor;
+  settings.tolerated_rms = options.baseline_factor * options.baseline_rms_mm;
+  settings.tests = options.tests;
+  settings.locate = options.locate;
+  settings.progress = options.progress;
+  return run_pipeline(engine, candidates, settings);
 }
 
 }  // namespace canalsim::diagnosis

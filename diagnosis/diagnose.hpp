@@ -71,6 +71,12 @@ struct DiagnoseOptions {
   // exceeds what the calibration leaves open"). Empty for an uncalibrated scenario.
   std::map<std::string, double> calibrated_std;
   double calibrated_z = 3.0;     // > 0
+  // Primary-channel residual RMS the calibration left on its own baseline recordings [mm] (0 =
+  // not calibrated). A model calibrated on a canal still differs from it by this much in the
+  // ordinary course (model form: grid, gate law); a residual within baseline_factor times it is
+  // not a change of the canal, and the verdict is `none` when no effect is significant.
+  double baseline_rms_mm = 0.0;  // >= 0
+  double baseline_factor = 2.0;  // > 0
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;  // share of the simulations done, and the stage

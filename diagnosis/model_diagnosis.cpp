@@ -616,7 +616,12 @@ Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDi
   if (recordings.empty()) throw InputError("diagnose --model: no recordings");
   const std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
   ModelExplainer explainer(recordings, options);  // throws InputError naming a recording it cannot use
-  return run_pipeline(explainer, candidates, {options.none_noise_factor, options.tests, options.locate, options.progress});
+  PipelineSettings settings;
+  settings.none_noise_factor = options.none_noise_factor;
+  settings.tests = options.tests;
+  settings.locate = options.locate;
+  settings.progress = options.progress;
+  return run_pipeline(explainer, candidates, settings);
 }
 
 }  // namespace canalsim::diagnosis

@@ -116,7 +116,7 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
       if (a.note.empty() != b.note.empty()) return a.note.empty();
       return a.score > b.score;
     });
-    const std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
+    const std::string corrected = set_verdict(d, settings.none_noise_factor, settings.tolerated_rms) ? d.verdict : "";
     if (!corrected.empty()) {
       progress(0.95, "explanation");
       explain_with_several(explainer, settings, d);
@@ -166,8 +166,9 @@ void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resol
   d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
 }
 
-bool set_verdict(Diagnosis& d, double none_noise_factor) {
-  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise ||
+bool set_verdict(Diagnosis& d, double none_noise_factor, double tolerated_rms) {
+  const bool ordinary = tolerated_rms > 0.0 && d.nominal_rms <= tolerated_rms;
+  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise || ordinary ||
                             std::all_of(d.tests_before.begin(), d.tests_before.end(),
                                         [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
   if (!d.effects.empty() && d.effects.front().significant) {
@@ -182,8 +183,11 @@ bool set_verdict(Diagnosis& d, double none_noise_factor) {
   }
   if (within_noise) {
     d.verdict = "none";
-    d.reason = "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) is within the measurement noise (" +
-               format_g(d.noise) + " mm) and no candidate improves the held-out fit";
+    d.reason = ordinary && d.nominal_rms > none_noise_factor * d.noise
+                   ? "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) is within what the calibration leaves on "
+                         "its baseline (" + format_g(tolerated_rms) + " mm) and no candidate improves the held-out fit"
+                   : "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) is within the measurement noise (" +
+                         format_g(d.noise) + " mm) and no candidate improves the held-out fit";
   } else {
     d.verdict = "unexplained";
     d.reason = "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) exceeds " + format_g(none_noise_factor) +

@@ -119,6 +119,8 @@ class Explainer {
 
 struct PipelineSettings {
   double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise
+  // A primary RMS up to this is ordinary too [mm] (what a calibration leaves on its baseline).
+  double tolerated_rms = 0.0;
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;       // share of the candidates explained, and the candidate
@@ -157,7 +159,7 @@ void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resol
 
 // Verdict and reason from the ranked effects and the nominal residual tests: the first effect
 // when it is significant (returns true); else `none` when the nominal residual is within
-// none_noise_factor × the noise or passes the residual tests; else `unexplained`.
-bool set_verdict(Diagnosis& d, double none_noise_factor);
+// none_noise_factor × the noise or `tolerated_rms`, or passes the residual tests; else `unexplained`.
+bool set_verdict(Diagnosis& d, double none_noise_factor, double tolerated_rms = 0.0);
 
 }  // namespace canalsim::diagnosis
