@@ -89,6 +89,18 @@ std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& s) {
   return s.calibrated_std;
 }
 
+double baseline_rms_of(const calibration::Calibration& c, const std::string& primary) {
+  double sq = 0.0;
+  int n = 0;
+  for (const auto& f : c.fits) {
+    if (f.channel == primary && !f.validation) {
+      sq += f.rms_after * f.rms_after;
+      ++n;
+    }
+  }
+  return n ? std::sqrt(sq / n) : 0.0;
+}
+
 std::vector<std::string> check_baseline(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings) {
   std::vector<std::string> problems;
   if (baseline.empty()) problems.push_back("no baseline recordings given");
@@ -205,6 +217,7 @@ BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, co
   }
   DiagnoseOptions d = o.diagnosis;
   d.calibrated_std = calibrated_std_of(out.calibration);
+  d.baseline_rms_mm = baseline_rms_of(out.calibration, d.primary);
   d.progress = nullptr;
   if (o.progress) {
     d.progress = [&o](const ProgressReport& r) {

@@ -9,9 +9,10 @@
 //      default parameter set (the laboratory's unknowns), replayed the way the diagnosis replays
 //      (the same upstream drive and command timing), without the grid check unless asked.
 //   3. Diagnose the recordings against the calibrated scenario (diagnose.hpp) with
-//      DiagnoseOptions::calibrated_std filled from the calibration's standard deviations: an
+//      DiagnoseOptions::calibrated_std filled from the calibration's standard deviations (an
 //      effect that moves a calibrated parameter is material only beyond what the calibration
-//      left open.
+//      left open) and baseline_rms_mm from its residual on the baseline (a residual within a few
+//      times it is the model's ordinary difference from the canal).
 //
 //   BaselineOptions o;
 //   const BaselineDiagnosis r = diagnose_with_baseline(scenario, baseline, recordings, o);
@@ -62,6 +63,10 @@ struct BaselineDiagnosis {
 // What a calibration left open, for DiagnoseOptions::calibrated_std: parameter name → one
 // standard deviation, for every parameter whose deviation the data determined (finite).
 std::map<std::string, double> calibrated_std_of(const calibration::Calibration& calibration);
+
+// What the calibration left on its own baseline, for DiagnoseOptions::baseline_rms_mm: the RMS of
+// the primary channel's residual after calibration over the baseline recordings [mm].
+double baseline_rms_of(const calibration::Calibration& calibration, const std::string& primary);
 
 // The calibrated standard deviations a scenario file carries ([calibration.std], written by
 // `canalsim calibrate`), each name checked against the scenario's calibration parameters.
