@@ -76,7 +76,8 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
   return out;
 }
 
-std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations) {
+std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations,
+                                   double baseline_rms_mm) {
   std::string out;
   std::map<std::string, int> counts;
   bool skipping = false;
@@ -87,6 +88,10 @@ std::string with_calibration_table(const std::string& text, const std::map<std::
     if (!skipping) out += line + "\n";
   }
   while (out.size() >= 2 && out.compare(out.size() - 2, 2, "\n\n") == 0) out.pop_back();
+  if (std::isfinite(baseline_rms_mm) && baseline_rms_mm > 0.0) {
+    out += "\n[calibration]  # canalsim calibrate: what the calibrated model still misses on its baseline\n"
+           "baseline_rms_mm = " + format_g(baseline_rms_mm, 6) + "\n";
+  }
   out += "\n[calibration.std]  # one standard deviation of each calibrated parameter (canalsim calibrate);\n"
          "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n";
   for (const auto& [name, sd] : deviations) {

@@ -28,6 +28,8 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
 // dot ("manning_n.1") are quoted. A previous [calibration] or [calibration.std] table is removed
 // first, so a calibrated file calibrated again carries only the new figures. Non-finite
 // deviations (not determined by the data) are left out.
-std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations);
+// `baseline_rms_mm` (the primary residual left on the baseline) goes into [calibration] before it.
+std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations,
+                                   double baseline_rms_mm = 0.0);
 
 }  // namespace canalsim::calibration

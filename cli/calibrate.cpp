@@ -15,6 +15,7 @@
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "core/declared_units.hpp"
+#include "diagnosis/baseline.hpp"
 #include "core/files.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
@@ -63,7 +64,8 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   std::map<std::string, double> deviations;  // [calibration.std]: what diagnose takes as left open
   for (const auto& p : c.parameters) deviations[p.name] = p.std;
   std::string out = "# Calibrated by canalsim calibrate from " + args.scenario + " on" + recordings + "\n" +
-                    calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations);
+                    calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations,
+                                                        diagnosis::baseline_rms_of(c, columns::level_downstream_end));
   const scenarios::Scenario back = scenarios::parse_scenario(out, args.out);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +

@@ -430,6 +430,7 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
   if (const Status status = given.validate(); !status) throw InputError("diagnose options: " + status.message());
   DiagnoseOptions options = given;
   if (options.calibrated_std.empty()) options.calibrated_std = calibrated_std_of(scenario);
+  if (options.baseline_rms_mm == 0.0) options.baseline_rms_mm = scenario.calibrated_baseline_rms_mm;
   std::vector<Recording> recordings;
   for (const Recording& r : recordings_as_recorded) recordings.push_back(in_millimetres(r));
   const std::vector<std::string> problems = check_recordings(scenario, recordings);

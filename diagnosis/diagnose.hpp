@@ -91,8 +91,8 @@ using calibration::check_recordings;
 
 // Runs the diagnosis. Recordings in declared units (u_unit / u_scale_mm_per_unit, y_unit /
 // y_scale_mm_per_unit; docs/recording-format.md) are converted to millimetres first. Without
-// options.calibrated_std, the scenario's own [calibration.std] table (a file written by
-// `canalsim calibrate`) fills it. Throws InputError (all problems of check_recordings, a bad
+// options.calibrated_std (baseline_rms_mm), the scenario's own [calibration.std] table
+// ([calibration] baseline_rms_mm) — a file written by `canalsim calibrate` — fills it. Throws InputError (all problems of check_recordings, a bad
 // declared unit, an unknown calibrated parameter, or invalid options); a simulation failure is
 // returned as ok = false with the message.
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,

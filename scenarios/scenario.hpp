@@ -173,6 +173,9 @@ struct Scenario {
   // calibrate` — calibration parameter name (cd_free, manning_n, offset_y_dwe_mm, ...) → one
   // standard deviation in its unit. The diagnosis reads it as DiagnoseOptions::calibrated_std.
   std::map<std::string, double> calibrated_std;
+  // [calibration] baseline_rms_mm: the primary-channel residual RMS the calibration left on its
+  // baseline recordings [mm]; 0 = not calibrated (DiagnoseOptions::baseline_rms_mm).
+  double calibrated_baseline_rms_mm = 0.0;
 
   const ExperimentSpec* find_experiment(const std::string& name) const;
 };

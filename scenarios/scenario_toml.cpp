@@ -220,11 +220,13 @@ ExperimentSpec read_experiment(TomlTable t, const Scenario& s) {
 
 namespace {
 
-// [calibration] as `canalsim calibrate` writes it: [calibration.std] maps calibration parameter
-// names to standard deviations. The names are the calibration catalog's (checked where the
-// catalog is known, diagnosis/baseline.hpp); here each must look like one and carry a number.
-std::map<std::string, double> read_calibration(TomlTable t) {
-  std::map<std::string, double> out;
+// [calibration] as `canalsim calibrate` writes it: the residual left on the baseline, and
+// [calibration.std] mapping calibration parameter names to standard deviations. The names are the
+// calibration catalog's (checked where the catalog is known, diagnosis/baseline.hpp); here each
+// must look like one and carry a number.
+void read_calibration(TomlTable t, Scenario& s) {
+  s.calibrated_baseline_rms_mm = t.number("baseline_rms_mm", 0.0, {0.0, 1.0e6}, "mm");
+  std::map<std::string, double>& out = s.calibrated_std;
   if (t.has("std")) {
     TomlTable st = t.table("std");
     for (const std::string& name : st.keys()) {
@@ -236,7 +238,6 @@ std::map<std::string, double> read_calibration(TomlTable t) {
     }
   }
   t.reject_unknown_keys();
-  return out;
 }
 
 }  // namespace
@@ -280,7 +281,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     n.reject_unknown_keys();
   }
   for (auto e : root.tables("experiments")) s.experiments.push_back(read_experiment(e, s));
-  if (root.has("calibration")) s.calibrated_std = read_calibration(root.table("calibration"));
+  if (root.has("calibration")) read_calibration(root.table("calibration"), s);
   root.reject_unknown_keys();
   return s;
 }

@@ -132,6 +132,8 @@ TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
   ASSERT_NE(table, std::string::npos) << cal;
   EXPECT_NE(cal.find("manning_n = ", table), std::string::npos) << cal;
   EXPECT_NE(cal.find("offset_y_dwe_mm = ", table), std::string::npos) << cal;
+  EXPECT_NE(cal.find("[calibration]"), std::string::npos) << cal;
+  EXPECT_NE(cal.find("baseline_rms_mm = "), std::string::npos) << cal;
 
   r = run_canalsim("diagnose --scenario cal.toml op3.csv --candidates sensor_offset --json d.json", scratch);
   EXPECT_EQ(r.code, 0) << r.err;

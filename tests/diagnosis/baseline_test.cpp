@@ -150,9 +150,11 @@ TEST(Baseline, TheCalibrationTableCarriesTheDeviationsAndIsCheckedLikeEveryKey) 
   std::string calibrated = calibration::with_calibration_table(
       text, {{"cd_free", 0.012}, {"manning_n", 4e-4}, {"offset_y_dwe_mm", 0.03}, {"cd_submerged", INFINITY}});
   // Calibrated again: the new table replaces the old one.
-  calibrated = calibration::with_calibration_table(calibrated, {{"cd_free", 0.02}, {"manning_n.1", 5e-4}});
+  calibrated = calibration::with_calibration_table(calibrated, {{"cd_free", 0.02}, {"manning_n.1", 5e-4}}, 0.125);
   const scenarios::Scenario s = scenarios::parse_scenario(calibrated, "cal.toml");
   EXPECT_EQ(s.calibrated_std, (std::map<std::string, double>{{"cd_free", 0.02}, {"manning_n.1", 5e-4}}));
+  EXPECT_EQ(s.calibrated_baseline_rms_mm, 0.125);
+  EXPECT_EQ(scenarios::parse_scenario(lab_text(), "lab.toml").calibrated_baseline_rms_mm, 0.0);
   EXPECT_EQ(s.name, "lab");
 
   // manning_n.1 names a pool of a canal with several pools: not of the one-pool lab.
@@ -178,6 +180,7 @@ TEST(Baseline, TheCalibrationTableCarriesTheDeviationsAndIsCheckedLikeEveryKey) 
   refused("[calibration.std]\ncd_free = -0.1\n", "calibration.std.cd_free = -0.1: expected a number in [0, 1e+06]");
   refused("[calibration.std]\ncd_free = \"small\"\n", "calibration.std.cd_free is a string");
   refused("[calibration]\nstdev = 1\n", "unknown key calibration.stdev");
+  refused("[calibration]\nbaseline_rms_mm = -1\n", "calibration.baseline_rms_mm = -1: expected a number in [0, 1e+06] mm");
   refused("[calibration.std]\n\"Cd free\" = 0.1\n", "expected a calibration parameter name");
 }
 

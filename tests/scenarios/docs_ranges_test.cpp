@@ -69,6 +69,7 @@ struct Base {
       {"experiments.input", {{"kind", "\"prbs\""}}},
       {"experiments.sensors", {}},
       {"[experiments.events]", {{"t_s", "1"}, {"pool", "1"}, {"offtake_m3s", "0.0002"}}},
+      {"calibration", {}},
       {"calibration.std", {}},
   };
   // Documented bounds that name another key, as the base scenario sets them.
