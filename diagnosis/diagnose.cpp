@@ -14,12 +14,7 @@
 #include "reduced_models/metrics.hpp"
 
 namespace canalsim::diagnosis {
-namespace scenario_engine {
-
-using calibration::observe;
-
-// The replay settings of the diagnosis options (calibration/replay.hpp).
-calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
+calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
   calibration::ReplayOptions r;
   r.channels = o.channels;
   r.fit_fraction = o.fit_fraction;
@@ -31,11 +26,14 @@ calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
   return r;
 }
 
+namespace scenario_engine {
+
+using calibration::observe;
 
 void Engine::prepare() {
   sensors_ = sensor_model_of(base_.sensors);
   period_ = base_.sensors.period_s;
-  const calibration::ReplayOptions replay = replay_options(o_);
+  const calibration::ReplayOptions replay = diagnosis_replay(o_);
   for (const Recording& rec : recordings_) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
   if (!recs_.empty() && !recs_.front().data.count(o_.primary)) {
     throw InputError(recs_.front().name + ": missing the primary channel " + o_.primary);
@@ -73,7 +71,7 @@ std::unique_ptr<Explainer> Engine::with_effects(const std::vector<std::pair<std:
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
-  return calibration::replay_true(s, p, replay_options(o_));
+  return calibration::replay_true(s, p, diagnosis_replay(o_));
 }
 
 std::vector<double> Engine::fit_residuals(const std::vector<Channels>& prediction) const {

@@ -87,6 +87,13 @@ struct DiagnoseOptions {
 using calibration::command_switch_times;
 using calibration::check_recordings;
 
+// The replay of the recordings the diagnosis uses (calibration/replay.hpp). A calibration whose
+// scenario is then diagnosed must replay the same way (fit_fraction 1): a baseline calibrated with
+// the recorded upstream level, say, and diagnosed with the upstream model would leave the
+// difference — an offset of the upstream sensor turned into a discharge coefficient — as a
+// spurious effect.
+calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& options);
+
 // Runs the diagnosis. Throws InputError (all problems of check_recordings, or invalid options);
 // a simulation failure is returned as ok = false with the message.
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
