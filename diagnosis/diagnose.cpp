@@ -318,7 +318,10 @@ EffectResult Engine::judge(Effect effect, Point best, int sims) {
   out.parameter.value = to_parameter(effect, best.theta);
   out.parameter.std = parameter_std(effect, best);
   out.material = is_material(effect, out.parameter.value) && beyond_calibration(effect, out.parameter.value);
-  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, false});
+  // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
+  // cost cannot name an effect that fits the upstream channels while the levels downstream —
+  // what the verdict is about — get worse (seen on calibrated realistic truths).
+  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, true});
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
     // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at
