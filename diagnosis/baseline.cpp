@@ -31,11 +31,9 @@ void throw_first(const std::vector<std::string>& problems, const std::string& co
   if (!problems.empty()) throw InputError(problems.front() + context);
 }
 
-// The calibration of the baseline, replayed as the diagnosis replays (calibration/replay.hpp):
-// the same upstream drive, command timing and settling, so that what the calibration fits is the
-// model the diagnosis then compares with. Its comparison settings stay calibration's own: every
-// sample after the initial state, levels and flow (the gate position's simulated value is an
-// artefact between solver steps), steps ending at the command's switches.
+// The calibration of the baseline, replayed exactly as the diagnosis replays (diagnosis_replay,
+// diagnose.hpp; every sample fitted), as the realistic blind test calibrates: what the calibration
+// fits is then the model the diagnosis compares with.
 calibration::CalibrateOptions calibration_options(const BaselineOptions& o) {
   calibration::CalibrateOptions c;
   c.parameters = o.parameters;
@@ -43,12 +41,8 @@ calibration::CalibrateOptions calibration_options(const BaselineOptions& o) {
   c.max_iterations = o.calibration_iterations;
   c.threads = o.diagnosis.threads;
   c.grid_check = o.grid_check;
-  const DiagnoseOptions& d = o.diagnosis;
-  c.replay.use_recorded_upstream = d.use_recorded_upstream;
-  c.replay.start_at_recorded_level = d.use_recorded_upstream;
-  c.replay.command_lead_samples = d.command_lead_samples;
-  c.replay.reconstruct_clock = d.reconstruct_clock;
-  c.replay.settle_time_s = d.settle_time_s;
+  c.replay = diagnosis_replay(o.diagnosis);
+  c.replay.fit_fraction = 1.0;
   if (o.progress) {
     c.progress = [&o](const ProgressReport& r) {
       o.progress({r.fraction < 0.0 ? -1.0 : kCalibrationShare * r.fraction, "calibrating on the baseline: " + r.message});

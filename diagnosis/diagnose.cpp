@@ -16,12 +16,7 @@
 #include "reduced_models/metrics.hpp"
 
 namespace canalsim::diagnosis {
-namespace scenario_engine {
-
-using calibration::observe;
-
-// The replay settings of the diagnosis options (calibration/replay.hpp).
-calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
+calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
   calibration::ReplayOptions r;
   r.channels = o.channels;
   r.fit_fraction = o.fit_fraction;
@@ -38,11 +33,14 @@ calibration::ReplayOptions replay_options(const DiagnoseOptions& o) {
   return r;
 }
 
+namespace scenario_engine {
+
+using calibration::observe;
 
 void Engine::prepare() {
   sensors_ = sensor_model_of(base_.sensors);
   period_ = base_.sensors.period_s;
-  const calibration::ReplayOptions replay = replay_options(o_);
+  const calibration::ReplayOptions replay = diagnosis_replay(o_);
   for (const Recording& rec : recordings_) recs_.push_back(calibration::prepare_replay(rec, base_, replay));
   if (!recs_.empty() && !recs_.front().data.count(o_.primary)) {
     throw InputError(recs_.front().name + ": missing the primary channel " + o_.primary);
@@ -80,7 +78,7 @@ std::unique_ptr<Explainer> Engine::with_effects(const std::vector<std::pair<std:
 }
 
 Channels Engine::simulate_true(const Scenario& s, const Prepared& p) {
-  return calibration::replay_true(s, p, replay_options(o_));
+  return calibration::replay_true(s, p, diagnosis_replay(o_));
 }
 
 std::vector<double> Engine::fit_residuals(const std::vector<Channels>& prediction) const {
@@ -327,7 +325,10 @@ EffectResult Engine::judge(Effect effect, Point best, int sims) {
   out.parameter.value = to_parameter(effect, best.theta);
   out.parameter.std = parameter_std(effect, best);
   out.material = is_material(effect, out.parameter.value) && beyond_calibration(effect, out.parameter.value);
-  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, false});
+  // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
+  // cost cannot name an effect that fits the upstream channels while the levels downstream —
+  // what the verdict is about — get worse (seen on calibrated realistic truths).
+  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, true});
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
     // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at

@@ -89,12 +89,19 @@ struct DiagnoseOptions {
 using calibration::command_switch_times;
 using calibration::check_recordings;
 
+// The replay of the recordings the diagnosis uses (calibration/replay.hpp). A calibration whose
+// scenario is then diagnosed must replay the same way (fit_fraction 1): a baseline calibrated with
+// the recorded upstream level, say, and diagnosed with the upstream model would leave the
+// difference — an offset of the upstream sensor turned into a discharge coefficient — as a
+// spurious effect.
+calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& options);
+
 // Runs the diagnosis. Recordings in declared units (u_unit / u_scale_mm_per_unit, y_unit /
 // y_scale_mm_per_unit; docs/recording-format.md) are converted to millimetres first. Without
 // options.calibrated_std (baseline_rms_mm), the scenario's own [calibration.std] table
-// ([calibration] baseline_rms_mm) — a file written by `canalsim calibrate` — fills it. Throws InputError (all problems of check_recordings, a bad
-// declared unit, an unknown calibrated parameter, or invalid options); a simulation failure is
-// returned as ok = false with the message.
+// ([calibration] baseline_rms_mm) — a file written by `canalsim calibrate` — fills it. Throws
+// InputError (all problems of check_recordings, a bad declared unit, an unknown calibrated
+// parameter, or invalid options); a simulation failure is returned as ok = false with the message.
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
                    const DiagnoseOptions& options = {});
 

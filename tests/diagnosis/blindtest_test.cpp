@@ -63,6 +63,43 @@ TEST(Blindtest, ATinyRunScoresItsTrials) {
   EXPECT_EQ(to_json(r)["trials"].size(), 2u);
 }
 
+// The realistic blind test end to end, small: a truth on twice the cells with the other limiter
+// and perturbed physics, a clean baseline of another PRBS calibrated on, then one trial with a
+// concealed sensor effect (a delay of 0.3–2 s or an offset of 0.5–3 mm) and one with two effects.
+// What it proves: the calibrated diagnosis names the effect in recordings its model did not make,
+// and the two-effect trial is scored on both names.
+TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffect) {
+  BlindtestOptions o;
+  o.trials = 1;
+  o.seed = 3;
+  o.experiments = {"op1", "op3"};
+  o.duration_s = 60.0;
+  o.effects = {"sensor_delay", "sensor_offset"};
+  o.include_none = false;
+  o.diagnose.candidates = {"sensor_delay", "sensor_offset", "discharge_coefficient"};
+  o.diagnose.settle_time_s = 150.0;
+  RealisticTruth realistic;
+  realistic.numerics.cells_factor = 2;
+  realistic.two_effect_trials = 1;
+  realistic.calibration.replay.settle_time_s = 150.0;
+  o.realistic = realistic;
+  const BlindtestResult r = run_blindtest(scenarios::builtin_scenario("lab"), o);
+  ASSERT_EQ(r.trials.size(), 2u);
+  const Trial& single = r.trials[0];
+  EXPECT_TRUE(single.message.empty()) << single.message;
+  EXPECT_NE(single.truth_drawn.find("cd_free"), std::string::npos);  // the truth was perturbed
+  EXPECT_GT(single.calibration_seconds, 0.0);
+  EXPECT_TRUE(single.correct) << single.truth.effect << " " << single.truth.value << " named " << single.verdict;
+  const Trial& two = r.trials[1];
+  ASSERT_TRUE(two.second);
+  EXPECT_NE(two.truth.effect, two.second->effect);
+  EXPECT_EQ(r.two_effect_trials, 1);
+  EXPECT_EQ(r.effect_trials, 1);  // the two-effect trial is scored apart from the confusion matrix
+  const nlohmann::json j = to_json(r);
+  EXPECT_TRUE(j["trials"][1].contains("second"));
+  EXPECT_NE(format_blindtest(r, o).find("two effects at once"), std::string::npos);
+}
+
 TEST(Blindtest, InvalidOptionsNameTheField) {
   BlindtestOptions o;
   o.trials = 0;
@@ -70,6 +107,13 @@ TEST(Blindtest, InvalidOptionsNameTheField) {
   o = {};
   o.effects = {"gremlins"};
   EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
+  o = {};
+  o.realistic = RealisticTruth{};
+  o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
+  EXPECT_NE(o.validate().message().find("realistic.noise_low_mm"), std::string::npos) << o.validate().message();
+  o.realistic->noise_low_mm = 0.03;
+  o.model = ModelDiagnoseOptions{};
+  EXPECT_NE(o.validate().message().find("realistic"), std::string::npos);
 }
 
 }  // namespace
