@@ -119,7 +119,7 @@ void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Record
     replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
     updates += (1.0 + 5.0 * candidates) * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
   }
-  // A calibration on a baseline replays each baseline recording about 100 times (ten
+  // A calibration on a baseline replays each baseline recording about 100–150 times (30
   // Levenberg–Marquardt iterations with a finite-difference Jacobian; bench/README.md).
   for (const Recording& rec : baseline) {
     scenarios::ExperimentSpec replay;

@@ -45,10 +45,10 @@ struct BaselineOptions {
   // Calibration parameter specs (NAME or NAME:LOW:HIGH); empty = calibration's default set.
   std::vector<std::string> parameters;
   int calibration_starts = 1;      // Levenberg–Marquardt runs; 1..10 (the scenario's values first)
-  // Levenberg–Marquardt iterations per run; 1..500. 10, not calibrate's 30: on four 255.5 s
-  // laboratory baselines of an independent truth the solver used all 30 for a cost 0.3 % below
-  // the one it had after 10, at 2.9 times the time (bench/README.md, "Diagnosis").
-  int calibration_iterations = 10;
+  // Levenberg–Marquardt iterations per run; 1..500. calibrate's 30: with the diagnosis' replay,
+  // 10 left the cost 29 % above the one after 30 on four 255.5 s laboratory baselines of an
+  // independent truth, and the calibration takes 7.3 s with 30 (bench/README.md, "Diagnosis").
+  int calibration_iterations = 30;
   bool grid_check = false;         // re-simulate the calibrated optimum on twice the cells
   ProgressCallback progress;       // calibration, then diagnosis, as one share
   Status validate() const;
