@@ -231,6 +231,9 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     result.median_parameter_error = errors[errors.size() / 2];
     result.max_parameter_error = errors.back();
     result.mean_heldout_gain = std::accumulate(gains.begin(), gains.end(), 0.0) / static_cast<double>(gains.size());
+    std::vector<double> sorted = gains;
+    std::sort(sorted.begin(), sorted.end());
+    result.median_heldout_gain = sorted[sorted.size() / 2];
     result.min_heldout_gain = *std::min_element(gains.begin(), gains.end());
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -284,11 +287,11 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
                 "top-1 accuracy          %d/%zu = %.1f%% (effect trials %d/%d)\n"
                 "false alarms (clean)    %s\n"
                 "parameter error         median %.1f%%, max %.1f%%, within 25%%: %d/%d correct attributions\n"
-                "held-out Nrmse gain     mean %+.2f points, min %+.2f, improved in %d/%d correct attributions\n"
+                "held-out Nrmse gain     median %+.2f points, min %+.2f, improved in %d/%d correct attributions\n"
                 "time                    %.1f s total, %.1f s per trial (one diagnosis of %zu recordings + their simulation)\n",
-                r.correct, r.trials.size(), 100.0 * r.accuracy, r.effect_correct, r.effect_trials,
+                r.correct, r.trials.size() - static_cast<std::size_t>(r.two_effect_trials), 100.0 * r.accuracy, r.effect_correct, r.effect_trials,
                 false_alarms.c_str(), 100.0 * r.median_parameter_error,
-                100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.mean_heldout_gain, r.min_heldout_gain,
+                100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.median_heldout_gain, r.min_heldout_gain,
                 r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;
   if (r.two_effect_trials > 0) {
@@ -320,7 +323,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
               {"clean_trials", r.clean_trials}, {"false_alarms", r.false_alarms},
               {"false_alarm_rate", r.false_alarm_rate}, {"within_25", r.within_25},
               {"median_parameter_error", r.median_parameter_error}, {"max_parameter_error", r.max_parameter_error},
-              {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain},
+              {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain}, {"median_heldout_gain", r.median_heldout_gain},
               {"min_heldout_gain", r.min_heldout_gain}, {"two_effect_trials", r.two_effect_trials},
               {"two_effect_both_named", r.two_effect_both}, {"seconds", r.seconds}, {"trials", trials}};
 }

@@ -114,7 +114,7 @@ struct BlindtestResult {
   double median_parameter_error = 0.0, max_parameter_error = 0.0;
   int gain_positive = 0;                      // correct attributions whose held-out Nrmse improved
   int two_effect_trials = 0, two_effect_both = 0;   // realistic: trials with two effects, both named
-  double mean_heldout_gain = 0.0, min_heldout_gain = 0.0;
+  double mean_heldout_gain = 0.0, median_heldout_gain = 0.0, min_heldout_gain = 0.0;
   double seconds = 0.0, mean_trial_seconds = 0.0;
 };
 

@@ -78,6 +78,7 @@ class Engine final : public Explainer {
   Point fit_gate_rate_limit(int& sims);
   Point fit_by_secant(Effect effect, const Point& start, int& sims);
   Point rate_limit_from_position(int& sims);
+  Point rate_limit_from_levels(int& sims);
   EffectResult unchanged(Effect effect) const;
   EffectResult judge(Effect effect, Point best, int sims);
   double parameter_std(Effect effect, const Point& best) const;

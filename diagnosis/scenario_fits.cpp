@@ -2,6 +2,7 @@
 #include "diagnosis/scenario_engine.hpp"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -230,11 +231,48 @@ Point Engine::fit_sensor_delay() {
 Point Engine::fit_sensor_quantization() { return evaluate(Effect::sensor_quantization, lattice_resolution()); }
 
 // From the recorded gate position when every recording has it, else by re-simulation.
+// Without a logged gate position (a laboratory logs levels) the speed must come from the levels:
+// each trial speed is a re-simulation. The cost is flat above the speeds the command's steps
+// ever reach and steep below, which a secant in θ = 1/v from the ideal gate cannot cross (it
+// stopped at its probe); a scan of speeds a factor 2 apart over the catalog's range, then a
+// golden-section search in log speed between the best scanned point's neighbours.
+Point Engine::rate_limit_from_levels(int& sims) {
+  std::map<double, Point> seen;  // by θ
+  const auto at = [&](double theta) -> const Point& {
+    auto it = seen.find(theta);
+    if (it == seen.end()) {
+      it = seen.emplace(theta, evaluate(Effect::gate_rate_limit, theta)).first;
+      ++sims;
+    }
+    return it->second;
+  };
+  std::vector<double> speeds;
+  for (double v = 40.0; v >= 1.0; v /= 2.0) speeds.push_back(v);
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < speeds.size(); ++i) {
+    if (at(1.0 / speeds[i]).cost < at(1.0 / speeds[best]).cost) best = i;
+  }
+  if (nominal_point_.cost <= at(1.0 / speeds[best]).cost) return nominal_point_;
+  double a = std::log(speeds[std::min(best + 1, speeds.size() - 1)]), b = std::log(speeds[best > 0 ? best - 1 : 0]);
+  const double g = (std::sqrt(5.0) - 1.0) / 2.0;
+  const auto cost_at = [&](double log_v) { return at(std::exp(-log_v)).cost; };
+  for (int it = 0; it < 6 && b - a > 0.02; ++it) {
+    const double c = b - g * (b - a), d = a + g * (b - a);
+    if (cost_at(c) < cost_at(d)) {
+      b = d;
+    } else {
+      a = c;
+    }
+  }
+  const auto lowest = std::min_element(seen.begin(), seen.end(),
+                                       [](const auto& x, const auto& y) { return x.second.cost < y.second.cost; });
+  return lowest->second;
+}
+
 Point Engine::fit_gate_rate_limit(int& sims) {
   bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
   for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
-  Point best = have_position ? rate_limit_from_position(sims)
-                             : fit_by_secant(Effect::gate_rate_limit, Point{0.0, nominal_, nominal_point_.r, nominal_point_.cost}, sims);
+  Point best = have_position ? rate_limit_from_position(sims) : rate_limit_from_levels(sims);
   if (std::isnan(best.theta)) best.theta = 0.0;
   return best;
 }
