@@ -75,7 +75,7 @@ Status RealisticTruth::validate() const {
                                    std::pair{"level_offset_mm", tolerances.level_offset_mm}}) {
     check.require(value >= 0.0 && value <= 10.0, std::string("tolerances.") + key, value, "[0, 10]");
   }
-  check.nested("calibration", calibration.validate());
+  check.nested("baseline", baseline.validate());
   return check.status();
 }
 

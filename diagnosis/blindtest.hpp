@@ -33,7 +33,7 @@
 #include "core/progress.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "diagnosis/model_diagnosis.hpp"
-#include "calibration/calibrate.hpp"
+#include "diagnosis/baseline.hpp"
 #include "scenarios/scenario.hpp"
 #include "scenarios/variation.hpp"
 
@@ -47,17 +47,11 @@ struct RealisticTruth {
   // The baseline runs each experiment with its PRBS seed plus this: other recordings than the
   // trial's, as a canal operator's baseline would be.
   std::uint64_t baseline_seed_offset = 1000;
-  // One Levenberg–Marquardt start and no grid check: the perturbations are small, so the
-  // scenario's values are a good start, and 40 calibrations must fit in a CI-sized run.
-  calibration::CalibrateOptions calibration = lean_calibration();  // its threads are set to 1
+  // The calibrate-then-diagnose workflow of `diagnose --baseline` (baseline.hpp): its defaults,
+  // one Levenberg–Marquardt start without the grid check; its `diagnosis` is replaced by the
+  // blind test's `diagnose`.
+  BaselineOptions baseline;
   Status validate() const;
-  static calibration::CalibrateOptions lean_calibration() {
-    calibration::CalibrateOptions o;
-    o.starts = 1;
-    o.screened_points = 0;
-    o.grid_check = false;
-    return o;
-  }
 };
 
 struct BlindtestOptions {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/format.hpp"
+#include "diagnosis/baseline.hpp"
 #include "scenarios/simulate.hpp"
 #include "scenarios/variation.hpp"
 
@@ -71,27 +72,6 @@ std::vector<ConcealedEffect> concealed_of(const Trial& t) {
   return out;
 }
 
-// The calibration's standard deviations by parameter name (what the diagnosis may not call an
-// effect: DiagnoseOptions::calibrated_std).
-std::map<std::string, double> calibrated_std(const calibration::Calibration& cal) {
-  std::map<std::string, double> out;
-  for (const auto& p : cal.parameters) out[p.name] = p.std;
-  return out;
-}
-
-// RMS of the primary channel's residual over the baseline after calibration [mm].
-double baseline_rms(const calibration::Calibration& cal, const std::string& primary) {
-  double sq = 0.0;
-  int n = 0;
-  for (const auto& f : cal.fits) {
-    if (f.channel == primary && !f.validation) {
-      sq += f.rms_after * f.rms_after;
-      ++n;
-    }
-  }
-  return n ? std::sqrt(sq / n) : 0.0;
-}
-
 // The realistic trial (blindtest.hpp): a perturbed truth simulated differently, a clean baseline
 // of it calibrated on, the trial's recordings diagnosed against the calibrated scenario.
 Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
@@ -103,30 +83,18 @@ Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
   trial.truth_drawn += "; noise " + format_fixed(noise, 3) + " mm";
   const std::uint64_t seed = c.options.seed * 1000003ULL + static_cast<std::uint64_t>(trial.index) * 101ULL;
   const std::string label = "trial" + std::to_string(trial.index);
-  auto clock = std::chrono::steady_clock::now();
-  const auto lap = [&] {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - clock).count();
-    clock = now;
-    return s;
-  };
+  const auto started = std::chrono::steady_clock::now();
   const std::vector<Recording> baseline =
       record(c, truth, {}, {noise, seed + 50, r.baseline_seed_offset, true, label + "/baseline"});
   const std::vector<Recording> recordings = record(c, truth, concealed_of(trial), {noise, seed, 0, true, label});
 
-  calibration::CalibrateOptions calibrate = r.calibration;
-  calibrate.replay = diagnosis_replay(c.diagnose);  // the same replay as the diagnosis (diagnose.hpp)
-  calibrate.replay.fit_fraction = 1.0;
-  calibrate.threads = 1;
-  calibrate.progress = nullptr;
-  trial.simulation_seconds = lap();
-  const calibration::Calibration cal = calibration::calibrate(c.base, baseline, {}, calibrate);
-  trial.calibration_seconds = lap();
-  if (!cal.ok) throw std::runtime_error("baseline calibration failed: " + cal.message);
-  DiagnoseOptions options = c.diagnose;
-  options.calibrated_std = calibrated_std(cal);
-  options.baseline_rms_mm = baseline_rms(cal, options.primary);
-  return diagnose(cal.calibrated, recordings, options);
+  trial.simulation_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // The operator's workflow, the one `diagnose --baseline` runs (baseline.hpp).
+  BaselineOptions options = r.baseline;
+  options.diagnosis = c.diagnose;
+  BaselineDiagnosis result = diagnose_with_baseline(c.base, baseline, recordings, options);
+  trial.calibration_seconds = result.calibration.seconds;
+  return std::move(result.diagnosis);
 }
 
 Diagnosis diagnose_trial(const TrialContext& c, Trial& trial) {

@@ -81,7 +81,6 @@ TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffec
   RealisticTruth realistic;
   realistic.numerics.cells_factor = 2;
   realistic.two_effect_trials = 1;
-  realistic.calibration.replay.settle_time_s = 150.0;
   o.realistic = realistic;
   const BlindtestResult r = run_blindtest(scenarios::builtin_scenario("lab"), o);
   ASSERT_EQ(r.trials.size(), 2u);
