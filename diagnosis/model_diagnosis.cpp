@@ -17,6 +17,7 @@
 #include "diagnosis/catalog.hpp"
 #include "reduced_models/identification.hpp"
 #include "reduced_models/metrics.hpp"
+#include "reduced_models/sensor_reading.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
@@ -280,44 +281,12 @@ EffectResult gate_rate_limit(const ModelEngine& e) {
                  {"speed", "mm/s", v, std_v}, is_material(Effect::gate_rate_limit, v));
 }
 
-// A lattice r·k + origin of recorded levels: real sensors have offsets, so the lattice need not
-// pass through zero.
-struct Lattice {
-  double step = 0.0;    // 0: the levels lie on no lattice
-  double origin = 0.0;  // in [0, step)
-};
-
-// The lattice the recorded levels lie on: the step is the smallest spacing between distinct
-// values (differences do not see an offset) that at least 95% of the samples sit on, within a
-// hundredth of it, about the origin given by the circular mean of the levels' phases
-// arg Σ exp(2πi y / r).
-Lattice recorded_lattice(const std::vector<ExperimentData>& data) {
-  std::vector<double> values;
-  for (const auto& d : data) values.insert(values.end(), d.y_dwe_mm.begin(), d.y_dwe_mm.end());
-  std::vector<double> sorted = values;
-  std::sort(sorted.begin(), sorted.end());
-  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-  if (sorted.size() < 3) return {};
-  std::vector<double> gaps;
-  for (std::size_t i = 1; i < sorted.size(); ++i) gaps.push_back(sorted[i] - sorted[i - 1]);
-  std::sort(gaps.begin(), gaps.end());
-  const double step = gaps[gaps.size() / 10];  // a low quantile: robust to a few off-lattice values
-  if (!(step > 1e-9)) return {};
-  std::complex<double> phase = 0.0;
-  for (double y : values) phase += std::polar(1.0, 2.0 * std::numbers::pi * y / step);
-  double origin = step * std::arg(phase) / (2.0 * std::numbers::pi);
-  if (origin < 0.0) origin += step;
-  std::size_t on = 0;
-  for (double y : values) {
-    const double m = (y - origin) / step;
-    on += std::abs(m - std::round(m)) < 0.01 ? 1 : 0;
-  }
-  if (static_cast<double>(on) < 0.95 * static_cast<double>(values.size())) return {};
-  return {step, origin};
-}
-
 EffectResult sensor_quantization(const ModelEngine& e) {
-  const Lattice lattice = recorded_lattice(e.data());
+  // Real sensors have offsets: the lattice r·k + origin need not pass through zero
+  // (reduced_models/sensor_reading.hpp, shared with the least-squares fit).
+  std::vector<const reduced::ExperimentData*> data;
+  for (const auto& d : e.data()) data.push_back(&d);
+  const reduced::SensorLattice lattice = reduced::recorded_lattice(data);
   const double r = lattice.step;
   const double modelled = e.nominal().actuation.quantum_mm;
   if (r == 0.0) return not_expressible("sensor_quantization", "the recorded levels lie on no lattice");

@@ -15,20 +15,27 @@ namespace {
 
 using namespace canalsim;
 
-std::vector<Recording> lab_recordings(const scenarios::Scenario& lab) {
+// op1–op4 of `canal` with level noise 0.05 mm and `effect` concealed.
+std::vector<Recording> record_op1_to_op4(const scenarios::Scenario& canal, const diagnosis::ConcealedEffect& effect,
+                                         std::uint64_t seed) {
   std::vector<Recording> out;
   for (const char* name : {"op1", "op2", "op3", "op4"}) {
-    scenarios::Scenario s = lab;
-    scenarios::ExperimentSpec e = *lab.find_experiment(name);
+    scenarios::Scenario s = canal;
+    scenarios::ExperimentSpec e = *canal.find_experiment(name);
     scenarios::SensorSpec sensors = s.sensors;
     sensors.noise_std_mm = 0.05;
+    sensors.seed = seed++;
     e.sensors = sensors;
-    diagnosis::conceal({"gate_leakage", 1.5}, s, e, 0.0);
+    diagnosis::conceal(effect, s, e, 0.0);
     Recording r = scenarios::simulate(s, e);
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }
   return out;
+}
+
+std::vector<Recording> lab_recordings(const scenarios::Scenario& lab) {
+  return record_op1_to_op4(lab, {"gate_leakage", 1.5}, 1);
 }
 
 void BM_DiagnoseFourLabRecordings(benchmark::State& state) {
@@ -61,20 +68,7 @@ std::vector<Recording> truth_recordings(const diagnosis::ConcealedEffect& effect
   truth.pools.front().manning_n *= 1.2;
   truth.downstream.gate.opening_m += 0.8e-3;
   truth.sensors.offset_y_dwe_mm = 0.4;
-  std::vector<Recording> out;
-  for (const char* name : {"op1", "op2", "op3", "op4"}) {
-    scenarios::Scenario s = truth;
-    scenarios::ExperimentSpec e = *truth.find_experiment(name);
-    scenarios::SensorSpec sensors = s.sensors;
-    sensors.noise_std_mm = 0.05;
-    sensors.seed = seed++;
-    e.sensors = sensors;
-    diagnosis::conceal(effect, s, e, 0.0);
-    Recording r = scenarios::simulate(s, e);
-    r.source = std::string(name) + ".csv";
-    out.push_back(std::move(r));
-  }
-  return out;
+  return record_op1_to_op4(truth, effect, seed);
 }
 
 void BM_DiagnoseWithBaseline(benchmark::State& state) {
