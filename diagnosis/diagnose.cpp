@@ -17,20 +17,19 @@
 
 namespace canalsim::diagnosis {
 calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
-  calibration::ReplayOptions r;
-  r.channels = o.channels;
-  r.fit_fraction = o.fit_fraction;
-  r.use_recorded_upstream = o.use_recorded_upstream;
-  r.command_lead_samples = o.command_lead_samples;
-  r.reconstruct_clock = o.reconstruct_clock;
-  r.settle_time_s = o.settle_time_s;
-  r.warmup_s = o.warmup_s;
   // A replay driven by the recorded upstream level starts where that level starts (as the
   // calibration's replay does): otherwise it would settle at the scenario's upstream level and
   // jump to the recorded one at the first sample. The scenario's own upstream model keeps its
   // level, so that a level-sensor offset stays a sensor effect.
-  r.start_at_recorded_level = o.use_recorded_upstream;
-  return r;
+  return {.channels = o.channels,
+          .fit_fraction = o.fit_fraction,
+          .use_recorded_upstream = o.use_recorded_upstream,
+          .command_lead_samples = o.command_lead_samples,
+          .reconstruct_clock = o.reconstruct_clock,
+          .settle_time_s = o.settle_time_s,
+          .warmup_s = o.warmup_s,
+          .start_at_recorded_level = o.use_recorded_upstream,
+          .warning = nullptr};
 }
 
 namespace scenario_engine {
