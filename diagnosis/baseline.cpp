@@ -74,7 +74,8 @@ std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& s) {
   if (s.calibrated_std.empty()) return {};
   const std::vector<calibration::Parameter> catalog = calibration::parameter_catalog(s);
   for (const auto& [name, sd] : s.calibrated_std) {
-    const bool known = std::any_of(catalog.begin(), catalog.end(), [&](const auto& p) { return p.name == name; });
+    const std::string& key = name;  // clang 14 cannot capture a structured binding
+    const bool known = std::any_of(catalog.begin(), catalog.end(), [&](const auto& p) { return p.name == key; });
     if (!known) {
       throw InputError(s.source + ": calibration.std." + name + ": not a calibration parameter of " + s.name +
                        " (expected one of " + calibration::parameter_names(catalog) + ")");
