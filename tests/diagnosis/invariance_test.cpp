@@ -125,6 +125,14 @@ TEST(Invariance, DeclaredCountsAreConvertedToMillimetres) {
   EXPECT_THROW(in_millimetres(bad), InputError);
 }
 
+// The concealed effect is the verdict and its parameter within 25 %; returns the estimate.
+double named_estimate(const Diagnosis& d) {
+  EXPECT_EQ(d.verdict, kTruth.effect) << d.reason;
+  const EffectResult& e = effect(d, kTruth.effect);
+  EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
+  return e.parameter.value;
+}
+
 // With the gate position recorded the speed is read off it; from the levels alone it is fitted by
 // re-simulating (a scan of speeds and a golden-section search; the secant it replaced stopped at
 // 5.18 mm/s for 3 here).
@@ -139,10 +147,7 @@ void expect_scenario_invariance(bool gate_position) {
     o.settle_time_s = kSettle;
     const Diagnosis d = diagnose(lab, v.recordings, o);
     ASSERT_TRUE(d.ok) << d.message;
-    EXPECT_EQ(d.verdict, kTruth.effect) << d.reason;
-    const EffectResult& e = effect(d, kTruth.effect);
-    EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
-    estimates.push_back(e.parameter.value);
+    estimates.push_back(named_estimate(d));
   }
   ASSERT_EQ(estimates.size(), 3u);
   std::cout << "scenario, " << (gate_position ? "gate position recorded" : "levels only")
@@ -167,10 +172,7 @@ TEST(Invariance, ModelVerdictDoesNotDependOnUnitOrSamplingRate) {
     o.candidates = {"gate_rate_limit", "sensor_quantization"};
     const Diagnosis d = diagnose_model(v.recordings, o);
     ASSERT_TRUE(d.ok) << d.message;
-    EXPECT_EQ(d.verdict, kTruth.effect) << d.reason;
-    const EffectResult& e = effect(d, kTruth.effect);
-    EXPECT_LE(parameter_error(kTruth, e.parameter.value), 0.25) << e.parameter.value;
-    estimates.push_back(e.parameter.value);
+    estimates.push_back(named_estimate(d));
   }
   ASSERT_EQ(estimates.size(), 3u);
   std::cout << "reduced model: gate speed [mm/s] from mm, counts, every fourth sample: " << estimates[0] << ", " << estimates[1]
