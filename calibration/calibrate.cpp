@@ -419,19 +419,22 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
     // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
     std::vector<double> numerical(parameters.size(), 0.0);
+    std::vector<double> values;
+    for (std::size_t j = 0; j < parameters.size(); ++j) values.push_back(parameters[j].from_search(best.z[j]));
+    std::vector<double> converged = values;
     if (o.grid_check) {
       if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
       c.discretisation = discretisation_shifts(fit, best.z, J);
       numerical = numerical_uncertainty(c.discretisation, parameters.size());
+      converged = grid_converged(parameters, values, c.discretisation);
       c.grid = grid_check(fit, c.discretisation.front().at_optimum, optimum, c.cost_after);
       for (auto& d : c.discretisation) d.at_optimum.clear();  // the result stays light (diagnosis keeps dozens)
     }
     for (std::size_t j = 0; j < parameters.size(); ++j) {
       const Parameter& p = parameters[j];
-      const double value = p.from_search(best.z[j]);
       const double grid = numerical[j];
-      ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), value,
-                          std::sqrt(stats.std[j] * stats.std[j] + grid * grid), stats.std[j], grid,
+      ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), values[j],
+                          std::sqrt(stats.std[j] * stats.std[j] + grid * grid), stats.std[j], grid, converged[j],
                           p.low, p.high, false, stats.sensitivity[j]};
       const double span = p.to_search(p.high) - p.to_search(p.low);
       e.at_bound = best.z[j] <= p.to_search(p.low) + 1e-6 * span || best.z[j] >= p.to_search(p.high) - 1e-6 * span;

@@ -21,7 +21,8 @@
 //      after, on the fitted and the validation recordings, and the grid check (the residual on a
 //      grid with twice the cells at the optimum).
 //   5. The numerical uncertainty (calibration/discretisation.hpp): the optimum re-estimated on
-//      twice the cells, the other limiter and half the Courant number; added to the std.
+//      twice the cells, the other limiter and half the Courant number; added to the std. The
+//      re-estimate on twice the cells, extrapolated, gives the grid-converged estimates.
 #pragma once
 
 #include <string>
@@ -69,6 +70,13 @@ struct ParameterEstimate {
   // grid check) combined in quadrature.
   double std = 0.0;
   double statistical_std = 0.0, grid_shift = 0.0;
+  // The grid-converged estimate (discretisation.hpp grid_converged): `value` extrapolated
+  // (Richardson, first order) to a grid without discretisation error, from the re-estimate on
+  // twice the cells; `value` without the grid check. `value` is the one that makes THIS model
+  // reproduce the recordings (the calibrated scenario holds it); `converged` is the estimate of the
+  // physical parameter, for a measured coefficient or a model on another grid. Its uncertainty is
+  // `std` (the numerical part is the extrapolation's own size).
+  double converged = 0.0;
   double low = 0.0, high = 0.0;
   bool at_bound = false;
   double sensitivity = 0.0;  // composite scaled sensitivity (weighted residual units)

@@ -12,6 +12,8 @@ namespace {
 
 using scenarios::Scenario;
 
+constexpr const char* kTwiceTheCells = "twice the cells";
+
 struct Alternative {
   const char* name;
   double weight;
@@ -20,7 +22,7 @@ struct Alternative {
 
 const std::vector<Alternative>& alternatives() {
   static const std::vector<Alternative> list = {
-      {"twice the cells", 2.0, [](Scenario& s) {
+      {kTwiceTheCells, richardson_factor(kGridOrder), [](Scenario& s) {
          for (auto& pool : s.pools) {
            pool.cells *= 2;
            pool.design_depth_m.clear();  // per-cell profiles belong to the old grid
@@ -89,6 +91,18 @@ std::vector<double> numerical_uncertainty(const std::vector<DiscretisationShift>
     u[j] = std::sqrt(sum);
   }
   return u;
+}
+
+std::vector<double> grid_converged(const std::vector<Parameter>& parameters, const std::vector<double>& values,
+                                   const std::vector<DiscretisationShift>& shifts) {
+  const auto cells = std::find_if(shifts.begin(), shifts.end(), [](const auto& s) { return s.name == kTwiceTheCells; });
+  if (cells == shifts.end()) return values;
+  std::vector<double> out = values;
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    const double lo = std::min(parameters[j].low, parameters[j].high), hi = std::max(parameters[j].low, parameters[j].high);
+    out[j] = std::clamp(values[j] + richardson_factor(kGridOrder) * cells->shift[j], lo, hi);
+  }
+  return out;
 }
 
 }  // namespace canalsim::calibration

@@ -37,16 +37,18 @@ std::string text_summary(const Calibration& c) {
   std::size_t w = 9;
   for (const auto& p : c.parameters) w = std::max(w, p.name.size() + 2);
   out << pad("parameter", w) << lpad("start", 12) << lpad("estimate", 12) << "  " << pad("± std", 16)
-      << pad("(numerics)", 12) << pad("bounds", 22) << "unit\n";
+      << pad("(numerics)", 12) << pad("converged", 12) << pad("bounds", 22) << "unit\n";
   for (const auto& p : c.parameters) {
     out << pad(p.name, w) << lpad(value_text(p.start), 12) << lpad(value_text(p.value), 12) << "  "
         << pad(std::string("± ").append(std_text(p)), 16) << pad(c.grid.done ? format_g(p.grid_shift, 2) : "-", 12)
-        << pad(std::string("[").append(format_g(p.low, 4)).append(", ").append(format_g(p.high, 4)).append("]"), 22) << p.unit
+        << pad(c.grid.done ? value_text(p.converged) : "-", 12) << pad(std::string("[").append(format_g(p.low, 4)).append(", ").append(format_g(p.high, 4)).append("]"), 22) << p.unit
         << (p.at_bound ? "  (at a bound)" : "") << "\n";
   }
   if (c.grid.done) {
     out << "(numerics: the part of the std that is how far the estimates move on other numerics — twice the\n"
-           " cells (counted twice, Richardson), the other limiter, half the Courant number)\n";
+           " cells (counted twice, Richardson), the other limiter, half the Courant number; converged: the\n"
+           " estimate extrapolated to a grid without discretisation error, for a measured value or a model on\n"
+           " another grid — the scenario written keeps the estimate, the best for this model's grid)\n";
   }
   if (!c.identifiability.empty()) {
     out << "\nnot identifiable from these recordings:\n";
@@ -91,7 +93,7 @@ nlohmann::json to_json(const Calibration& c) {
   for (const auto& p : c.parameters) {
     j["parameters"].push_back({{"name", p.name}, {"unit", p.unit}, {"key", p.key}, {"start", p.start},
                                {"value", p.value}, {"std", number(p.std)}, {"statistical_std", number(p.statistical_std)},
-                               {"numerical_std", p.grid_shift}, {"low", p.low}, {"high", p.high},
+                               {"numerical_std", p.grid_shift}, {"converged_value", p.converged}, {"low", p.low}, {"high", p.high},
                                {"at_bound", p.at_bound}, {"sensitivity", p.sensitivity}});
   }
   json corr = json::array();

@@ -141,14 +141,19 @@ std::string html_report(const Calibration& c, const std::string& title) {
     << format_fixed(c.seconds, 1) << " s. Standard deviations include the residual autocorrelation ("
     << format_fixed(c.inflation, 1) << "&times; variance).</p>";
   h << "<h2>Parameters</h2><table><tr><th>parameter</th><th>start</th><th>estimate</th><th>&plusmn; std</th>"
-    << "<th>bounds</th><th>unit</th><th>scenario key</th><th>sensitivity</th></tr>";
+    << "<th>grid-converged</th><th>bounds</th><th>unit</th><th>scenario key</th><th>sensitivity</th></tr>";
   for (const auto& p : c.parameters) {
     h << "<tr><td class='l'>" << html::escape(p.name) << "</td><td>" << format_g(p.start, 5) << "</td><td>" << format_g(p.value, 5)
       << (p.at_bound ? " (bound)" : "") << "</td><td>" << (std::isfinite(p.std) ? format_g(p.std, 2) : "not determined")
-      << "</td><td>[" << format_g(p.low, 4) << ", " << format_g(p.high, 4) << "]</td><td>" << html::escape(p.unit)
+      << "</td><td>" << (c.grid.done ? format_g(p.converged, 5) : "-") << "</td><td>[" << format_g(p.low, 4) << ", " << format_g(p.high, 4) << "]</td><td>" << html::escape(p.unit)
       << "</td><td class='l'>" << html::escape(p.key) << "</td><td>" << format_g(p.sensitivity, 3) << "</td></tr>";
   }
   h << "</table>";
+  if (c.grid.done) {
+    h << "<p>Grid-converged: the estimate extrapolated (Richardson, first order) from its re-estimate on twice the "
+      << "cells to a grid without discretisation error &mdash; for a measured value or a model on another grid. "
+      << "The calibrated scenario keeps the estimate, the best for its own grid.</p>";
+  }
   if (!c.identifiability.empty()) {
     h << "<h3>Not identifiable from these recordings</h3><ul>";
     for (const auto& u : c.identifiability) {

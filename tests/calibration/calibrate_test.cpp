@@ -84,15 +84,20 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
     EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << p.name << " = " << p.value << " ± " << p.std;
     EXPECT_LT(p.std, 0.2 * std::abs(want)) << p.name << " = " << p.value << " ± " << p.std;
     EXPECT_GT(p.grid_shift, p.statistical_std) << p.name << ": the model's form, not the noise, limits it";
+    // The grid-converged estimate (Richardson from the re-estimate on twice the cells): the
+    // issue's bar, within 2 std and 5 %, for every parameter.
+    EXPECT_LE(std::abs(p.converged - want), 2.0 * p.std) << p.name << " converged " << p.converged << " ± " << p.std;
+    EXPECT_LE(std::abs(p.converged - want), 0.05 * std::abs(want)) << p.name << " converged " << p.converged;
+    EXPECT_DOUBLE_EQ(p.converged, p.value + richardson_factor(kGridOrder) * c.discretisation[0].shift[j]) << p.name;
     if (p.name != "offset_y_dwe_mm") {
       EXPECT_LE(relative_error(p, want), 0.05) << p.name << " = " << p.value << " ± " << p.std;
       continue;
     }
-    // y_dwe is read in the last cell (downstream_sensor_x_m = -1): its centre lies half a cell
-    // from the downstream gate, 22.5 mm on the model's 100 cells and 11 mm on the truth's 200, where
-    // the surface still moves towards the gate. The offset takes up the difference: 0.11 mm, 7 %
-    // of 1.5 mm (measured 7.2 %). The re-estimate on twice the cells, whose last cell is the
-    // truth's, moves it towards the truth: the grid, not the method, decides it.
+    // The model's own estimate of y_dwe's offset misses 5 % (measured 7.7 %, 0.115 mm): what makes
+    // 100 cells reproduce a 200-cell truth with another limiter is not the truth's offset (the gate
+    // laws and the last-cell sensor see depths half a cell from the gates; docs/calibration.md).
+    // The re-estimate on twice the cells moves it towards the truth — the grid, not the method,
+    // decides it — and the extrapolation carries it within 5 %.
     EXPECT_LE(relative_error(p, want), 0.10) << p.name << " = " << p.value << " ± " << p.std;
     const double on_twice_the_cells = p.value + c.discretisation[0].shift[j];
     EXPECT_LT(std::abs(on_twice_the_cells - want), 0.6 * std::abs(p.value - want)) << on_twice_the_cells;
