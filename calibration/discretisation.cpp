@@ -47,6 +47,14 @@ double cost_per_sample(const std::vector<double>& r) {
   return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
 }
 
+// θ(to) − θ(from) per parameter, in parameter units.
+std::vector<double> parameter_move(const std::vector<Parameter>& parameters, const std::vector<double>& from,
+                         const std::vector<double>& to) {
+  std::vector<double> out;
+  for (std::size_t j = 0; j < parameters.size(); ++j) out.push_back(parameters[j].from_search(to[j]) - parameters[j].from_search(from[j]));
+  return out;
+}
+
 // Gauss–Newton with the Jacobian of the optimum held fixed: z_{k+1} = z_k + argmin |r_alt(z_k) + J δ|.
 DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double>& z, const std::vector<double>& J,
                                 const Alternative& a, int iterations) {
@@ -67,10 +75,9 @@ DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double
     const std::vector<double> step = optimum_shift(J, r, parameters.size());
     for (std::size_t j = 0; j < zk.size(); ++j) zk[j] += step[j];
     zk = clamp_to_bounds(parameters, zk);
+    if (k == 0) out.linear_response = parameter_move(parameters, z, zk);
   }
-  for (std::size_t j = 0; j < parameters.size(); ++j) {
-    out.shift.push_back(parameters[j].from_search(zk[j]) - parameters[j].from_search(z[j]));
-  }
+  out.shift = parameter_move(parameters, z, zk);
   return out;
 }
 
@@ -100,7 +107,7 @@ std::vector<double> grid_converged(const std::vector<Parameter>& parameters, con
   std::vector<double> out = values;
   for (std::size_t j = 0; j < parameters.size(); ++j) {
     const double lo = std::min(parameters[j].low, parameters[j].high), hi = std::max(parameters[j].low, parameters[j].high);
-    out[j] = std::clamp(values[j] + richardson_factor(kGridOrder) * cells->shift[j], lo, hi);
+    out[j] = std::clamp(values[j] + richardson_factor(kGridOrder) * cells->linear_response[j], lo, hi);
   }
   return out;
 }

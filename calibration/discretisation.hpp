@@ -19,21 +19,25 @@
 // Each re-estimate is a few Gauss–Newton iterations on the alternative model with the Jacobian
 // of the optimum held fixed (the alternatives are small perturbations of the model, so the
 // Jacobian barely changes, and each iteration costs one simulation per recording instead of a
-// whole Levenberg–Marquardt run): the first-order move of the optimum with the numerics. The
-// moves combine in quadrature into the numerical uncertainty that calibrate() adds to the
-// statistical std (ParameterEstimate::grid_shift), and the move on twice the cells, extrapolated,
-// gives the grid-converged estimate (ParameterEstimate::converged): θ_∞ ≈ θ_N + (θ_2N − θ_N) ·
-// 2^p / (2^p − 1), the value a model without discretisation error would calibrate to — the one to
-// compare with a measured coefficient, or to carry to a model on another grid.
+// whole Levenberg–Marquardt run). The moves combine in quadrature into the numerical uncertainty
+// that calibrate() adds to the statistical std (ParameterEstimate::grid_shift).
+//
+// The grid-converged estimate (ParameterEstimate::converged) extrapolates the move on twice the
+// cells: θ_∞ ≈ θ_N + (θ_2N − θ_N) · 2^p / (2^p − 1), the value a model without discretisation
+// error would calibrate to — the one to compare with a measured coefficient, or to carry to a
+// model on another grid. It uses the FIRST iteration's move, (JᵀJ)⁻¹ Jᵀ r_2N(θ_N): the linear
+// response of the optimum to the change of model (Jᵀ r_N = 0 at the optimum), defined without an
+// iteration count. Further iterations with the held Jacobian do not converge along a nearly
+// singular direction: on the laboratory canal 1, 2, 3, 5 and 8 of them put the converged Cd
+// submerged at −0.6, +1.8, +4.0, +7.8 and +12.1 % from the truth (docs/calibration.md) — a
+// wander the numerical std keeps (it is how ill-determined the move is), an estimate must not.
 //
 // The order p = 1 (kGridOrder): the gate laws see the depth of the cell next to the gate, half a
 // cell from it, and a sensor in the last cell sits half a cell from the downstream gate — errors
-// proportional to the cell size. Measured on the laboratory canal (docs/calibration.md), the moves
-// 100 -> 200 and 200 -> 400 cells against an 800-cell truth shrink 2.2-3.2-fold (p = 1.1-1.7) for
-// the roughness and the level offsets; the discharge coefficients and the downstream opening move
-// back and forth at the level of their valley and show no order. p = 1, the lowest measured, is
-// the full first-order correction; the numerical std keeps its size as the uncertainty of the
-// extrapolation.
+// proportional to the cell size. Measured on the laboratory canal (docs/calibration.md), the
+// linear-response moves 100 -> 200 and 200 -> 400 cells against an 800-cell truth shrink by the
+// ratios given there; p = 1 is the full first-order correction, and the numerical std keeps its
+// size as the uncertainty of the extrapolation.
 #pragma once
 
 #include <cmath>
@@ -53,6 +57,7 @@ struct DiscretisationShift {
   std::string name;            // "twice the cells", "the other limiter", "half the Courant number"
   double weight = 1.0;         // factor on the move in the uncertainty (Richardson: 2 for the cells)
   std::vector<double> shift;   // θ_alternative − θ per parameter, parameter units
+  std::vector<double> linear_response;  // the first iteration's move (the grid-converged estimate's)
   double cost = 0.0;           // weighted cost per sample of the alternative at the optimum
   // The alternative's prediction at the optimum, for the grid check (calibrate() clears it).
   std::vector<Channels> at_optimum;
@@ -67,8 +72,8 @@ std::vector<DiscretisationShift> discretisation_shifts(ReplayProblem& problem, c
 std::vector<double> numerical_uncertainty(const std::vector<DiscretisationShift>& shifts, std::size_t parameters);
 
 // The grid-converged estimates: `values` (parameter units) moved by Richardson's extrapolation
-// of the re-estimate on twice the cells, θ + factor · (θ_2N − θ), held within the bounds; `values`
-// unchanged when `shifts` has no re-estimate on twice the cells.
+// of the linear response on twice the cells, θ + factor · (θ_2N − θ), held within the bounds;
+// `values` unchanged when `shifts` has no re-estimate on twice the cells.
 std::vector<double> grid_converged(const std::vector<Parameter>& parameters, const std::vector<double>& values,
                                    const std::vector<DiscretisationShift>& shifts);
 

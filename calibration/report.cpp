@@ -120,7 +120,8 @@ nlohmann::json to_json(const Calibration& c) {
   }
   j["discretisation"] = json::array();
   for (const auto& d : c.discretisation) {
-    j["discretisation"].push_back({{"numerics", d.name}, {"weight", d.weight}, {"shift", d.shift}, {"cost", d.cost}});
+    j["discretisation"].push_back({{"numerics", d.name}, {"weight", d.weight}, {"shift", d.shift},
+                                   {"linear_response", d.linear_response}, {"cost", d.cost}});
   }
   j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;
