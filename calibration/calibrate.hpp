@@ -71,8 +71,8 @@ struct ParameterEstimate {
   double std = 0.0;
   double statistical_std = 0.0, grid_shift = 0.0;
   // The grid-converged estimate (discretisation.hpp grid_converged): `value` extrapolated
-  // (Richardson, first order) to a grid without discretisation error, from the re-estimate on
-  // twice the cells; `value` without the grid check. `value` is the one that makes THIS model
+  // (Richardson, first order) to a grid without discretisation error, from the linear response
+  // of the optimum to twice the cells; `value` without the grid check. `value` is the one that makes THIS model
   // reproduce the recordings (the calibrated scenario holds it); `converged` is the estimate of the
   // physical parameter, for a measured coefficient or a model on another grid. Its uncertainty is
   // `std` (the numerical part is the extrapolation's own size).
