@@ -23,9 +23,10 @@ using scenarios::Scenario;
 // The nominal model: the laboratory canal as built in (100 cells, van Leer, Courant 0.8).
 Scenario model() { return scenarios::builtin_scenario("lab"); }
 
-// The truth: the canal with the issue's six parameters perturbed, simulated on 200 cells with the
-// minmod limiter at Courant 0.45; its sensors are applied by realistic_levels() below.
-Scenario perturbed_truth() {
+// The truth: the canal with the issue's six parameters perturbed, simulated on 200 cells (or
+// `cells_factor` × 100) with the minmod limiter at Courant 0.45; its sensors are applied by
+// realistic_levels() below.
+Scenario perturbed_truth(int cells_factor = 2) {
   Scenario s = model();
   s.head_gate->discharge_coefficient = 0.9;            // Cd free × 0.9
   s.head_gate->submerged_discharge_coefficient = 1.1;  // Cd submerged × 1.1
@@ -35,7 +36,7 @@ Scenario perturbed_truth() {
   s.sensors.offset_y_dwe_mm = -1.5;
   s.sensors.resolution_mm = 0.0;                       // the realistic sensors quantise
   testing::TruthVariation v;
-  v.cells_factor = 2;
+  v.cells_factor = cells_factor;
   v.cfl = 0.45;
   return testing::independent_truth(s, v);
 }
@@ -104,6 +105,33 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
     EXPECT_LT(std::abs(on_twice_the_cells - want), 0.6 * std::abs(p.value - want)) << on_twice_the_cells;
   }
   EXPECT_LT(c.cost_after, 0.05 * c.cost_before);
+}
+
+// The grid-converged estimate on another truth: 400 cells. The model's own offset of y_dwe is
+// 6.8 % off there (measured), the converged one 0.3 %; the other offset, the roughness and the
+// opening converge within 5 % as well. The discharge-coefficient pair is not asserted: on this
+// truth the fit stops at a cost of 0.107 and the pair sits elsewhere along its valley (Cd free
+// −6.1 %, Cd submerged +6.4 %; converged −5.5 %, +10.4 %: docs/calibration.md, "What it
+// achieves").
+TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTimesTheCells) {
+  CalibrateOptions o;
+  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  const Scenario truth = perturbed_truth(4);
+  const Calibration c = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 80.0), {}, o);
+  ASSERT_TRUE(c.ok) << c.message;
+  const std::map<std::string, double> expected = {
+      {"manning_n", truth.pools.front().manning_n}, {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3},
+      {"offset_y_dw_mm", 2.0}, {"offset_y_dwe_mm", -1.5}};
+  for (const ParameterEstimate& p : c.parameters) {
+    if (!expected.count(p.name)) continue;
+    const double want = expected.at(p.name);
+    EXPECT_LE(std::abs(p.converged - want), 2.0 * p.std) << p.name << " converged " << p.converged << " ± " << p.std;
+    EXPECT_LE(std::abs(p.converged - want), 0.05 * std::abs(want)) << p.name << " converged " << p.converged;
+    if (p.name == "offset_y_dwe_mm") {
+      EXPECT_GT(relative_error(p, want), 0.05) << "the model's own estimate: " << p.value;
+      EXPECT_LT(std::abs(p.converged - want), 0.5 * std::abs(p.value - want)) << p.value << " -> " << p.converged;
+    }
+  }
 }
 
 // The issue's acceptance: after calibration, the residual on OTHER recordings of the canal (not
