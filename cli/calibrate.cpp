@@ -56,9 +56,11 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   std::vector<calibration::KeyEdit> edits;
   for (const auto& p : c.parameters) {
     const std::string spread = std::isfinite(p.std) ? "± " + format_g(p.std, 2) : "std not determined";
+    // The key holds the value for this model's grid; the grid-converged estimate is for reference.
+    const std::string converged = c.grid.done ? "; grid-converged " + format_g(p.converged, 6) : "";
     edits.push_back({p.key, p.value * p.key_scale,
                      "calibrated: " + p.name + " = " + format_g(p.value, 6) + " " + spread + " " + p.unit + " (was " +
-                         format_g(p.start, 6) + ")"});
+                         format_g(p.start, 6) + converged + ")"});
   }
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();

@@ -62,6 +62,7 @@ TEST(Calibrate, WritesAScenarioThatSimulateReadsWithEachValueAndItsStd) {
   EXPECT_NE(read_text(scratch / "cal.html").find("<svg"), std::string::npos);
   // The grid-converged estimate (docs/calibration.md, step 5) beside the model's own.
   EXPECT_NE(r.out.find("converged"), std::string::npos) << r.out;
+  EXPECT_NE(toml.find("; grid-converged "), std::string::npos) << toml;
   EXPECT_NE(read_text(scratch / "cal.json").find("\"converged_value\""), std::string::npos);
   const RunResult sim = run_canalsim("simulate cal.toml -e op3 -o again.csv", scratch);
   EXPECT_EQ(sim.code, 0) << sim.err;
