@@ -150,8 +150,8 @@ std::string html_report(const Calibration& c, const std::string& title) {
   }
   h << "</table>";
   if (c.grid.done) {
-    h << "<p>Grid-converged: the estimate extrapolated (Richardson, first order) from its re-estimate on twice the "
-      << "cells to a grid without discretisation error &mdash; for a measured value or a model on another grid. "
+    h << "<p>Grid-converged: the estimate extrapolated (Richardson, first order) from its linear response to twice "
+      << "the cells to a grid without discretisation error &mdash; for a measured value or a model on another grid. "
       << "The calibrated scenario keeps the estimate, the best for its own grid.</p>";
   }
   if (!c.identifiability.empty()) {
