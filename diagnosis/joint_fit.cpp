@@ -35,16 +35,16 @@ namespace {
 // effect and one for the step). Measured on the lab: a leak and a downstream gate converge in 13.
 constexpr int kJointIterations = 15;
 
-// Forward-difference steps, as a share of each θ's catalog range. The simulated cost jitters by
-// ~1 % between parameters 1 % of the range apart (measured: a leak stepped by 0.01 mm on the lab),
-// which steps that small turn into a false gradient: they stopped a leak and a downstream gate at
-// 3.9 and −0.7 mm (truth 2.5 and −1.5); 5 % steps reach 2.75 and −1.37.
-constexpr double kStepShare = 0.05;
+// Forward-difference steps, as a share of each θ's catalog range. The replay ends a solver step at
+// every switch of the command (diagnosis_replay), so the response is continuous in the parameters;
+// without that, the gate switched at the first step boundary after the command, the simulated cost
+// jittered by ~1 % between parameters 1 % of their range apart, and Levenberg–Marquardt stopped a
+// leak and a downstream gate at 3.9 and −0.7 mm (truth 2.5 and −1.5; now 2.50 and −1.52).
+constexpr double kStepShare = 0.02;
 
 // Joint fits predict the expected reading of a quantised level (Engine::Readings): a prediction
-// rounded to the sensor's lattice is piecewise constant in the parameters, and Levenberg–Marquardt
-// stopped on its flat steps (a leak and a downstream gate stopped at 3.9 and −0.7 mm where the
-// truth, 2.5 and −1.5 mm, cost 30 times less).
+// rounded to the sensor's lattice is piecewise constant in the parameters, whose finite
+// differences are noise.
 constexpr auto kReadings = Engine::Readings::expected;
 
 // The residual vector r(z) of a joint fit as Ceres sees it. Jacobians by forward differences
