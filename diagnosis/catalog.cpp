@@ -72,6 +72,14 @@ double to_theta(Effect effect, double parameter) {
   }
 }
 
+double parameter_per_theta(Effect effect, double theta) {
+  switch (effect) {
+    case Effect::gate_rate_limit: return theta > 0.0 ? 1.0 / (theta * theta) : 0.0;  // |d(1/θ)/dθ|
+    case Effect::friction: return std::exp(theta);
+    default: return 1.0;
+  }
+}
+
 double no_effect_parameter(Effect effect) { return to_parameter(effect, info(effect).theta_none); }
 
 bool is_material(Effect effect, double parameter) {

@@ -65,6 +65,9 @@ std::string catalog_names();
 // Parameter value (user units) ↔ internal coordinate θ.
 double to_parameter(Effect effect, double theta);
 double to_theta(Effect effect, double parameter);
+// |d parameter / d θ| at θ: maps a standard deviation in θ to the parameter's unit (0 for the rate
+// limit at θ = 0, the ideal actuator).
+double parameter_per_theta(Effect effect, double theta);
 // The parameter of "no effect" (0 mm, multiplier 1, infinite speed for the rate limit).
 double no_effect_parameter(Effect effect);
 // |value - no effect| in the parameter's own unit, for the materiality check (for the rate limit:

@@ -29,6 +29,10 @@ calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
           .settle_time_s = o.settle_time_s,
           .warmup_s = o.warmup_s,
           .start_at_recorded_level = o.use_recorded_upstream,
+          // Continuous in the effects' parameters (as the calibration's replay): a gate that
+          // switched at the first solver step after the command made the cost jitter by ~1 %
+          // between parameters 1 % of their range apart, a false gradient for the fits.
+          .step_to_command_changes = true,
           .warning = nullptr};
 }
 
@@ -59,7 +63,7 @@ Scenario Engine::scenario_for(std::size_t i) const {
 // The engine of the same recordings whose nominal model carries `effects`: hydraulic and sensor
 // effects edit the scenario (catalog.hpp apply_effect); a lateral outflow keeps this engine's
 // inflow as its reference, so that its fraction means the same in every engine.
-std::unique_ptr<Explainer> Engine::with_effects(const std::vector<std::pair<std::string, double>>& effects) const {
+std::unique_ptr<Engine> Engine::with_effects(const std::vector<std::pair<std::string, double>>& effects) const {
   auto engine = std::make_unique<Engine>(base_, recordings_, o_);
   engine->carried_lateral_ = carried_lateral_;
   engine->carried_inflow_m3s_ = carried_lateral_ != 0.0 ? carried_inflow_m3s_ : inflow_m3s_;
@@ -203,42 +207,66 @@ double Engine::reading_spread(double r) const {
   return std::sqrt(std::max(mse - r * r / 12.0, 0.01 * r * r));
 }
 
-std::vector<Channels> Engine::predict(Effect effect, double theta) {
-  const double parameter = to_parameter(effect, theta);
-  std::vector<Channels> out(recs_.size());
-  if (info(effect).sensor_only) {
-    SensorModel m = sensors_;
-    apply_effect(effect, parameter, m);
-    if (effect == Effect::sensor_quantization) {
+// What the sensors read with `effects` in the model: sensor effects re-observe the simulation of
+// the hydraulic ones (the nominal one when there are none).
+std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Readings readings) {
+  SensorModel m = sensors_;
+  std::vector<EffectAt> hydraulic;
+  for (const auto& [effect, theta] : effects) {
+    const double parameter = to_parameter(effect, theta);
+    if (!info(effect).sensor_only) {
+      hydraulic.push_back({effect, theta});
+    } else if (effect == Effect::sensor_quantization) {
       m.resolution_mm = std::max(parameter, sensors_.resolution_mm);
       m.reading_spread_mm = reading_spread(m.resolution_mm);
+    } else {
+      apply_effect(effect, parameter, m);
     }
-    for (std::size_t i = 0; i < recs_.size(); ++i) out[i] = observe(truth_[i], m, period_);
-    return out;
   }
-  parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
-    Scenario s = scenario_for(i);
-    apply_effect(effect, parameter, s, inflow_m3s_[i]);
-    out[i] = observe(simulate_true(s, recs_[i]), sensors_, period_);
-  });
+  if (readings == Readings::expected && m.resolution_mm > 0.0 && m.reading_spread_mm == 0.0) {
+    m.reading_spread_mm = reading_spread(m.resolution_mm);
+  }
+  const std::vector<Channels>& truth = hydraulic.empty() ? truth_ : simulated(hydraulic);
+  std::vector<Channels> out(recs_.size());
+  for (std::size_t i = 0; i < recs_.size(); ++i) out[i] = observe(truth[i], m, period_);
   return out;
 }
 
-Point Engine::evaluate(Effect effect, double theta) {
+// The recordings replayed with hydraulic effects, kept by their θ: a joint fit asks for the same
+// hydraulics again (Levenberg–Marquardt's accepted point, then its Jacobian; a sensor effect's
+// column). A bounded cache: it is emptied when full.
+const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydraulic) {
+  std::vector<double> key;
+  for (const auto& [effect, theta] : hydraulic) {
+    key.push_back(static_cast<double>(effect));
+    key.push_back(theta);
+  }
+  if (const auto it = simulations_.find(key); it != simulations_.end()) return it->second;
+  constexpr std::size_t kKept = 24;
+  if (simulations_.size() >= kKept) simulations_.clear();
+  ++simulations_run_;
+  std::vector<Channels> truth(recs_.size());
+  parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
+    Scenario s = scenario_for(i);
+    for (const auto& [effect, theta] : hydraulic) apply_effect(effect, to_parameter(effect, theta), s, inflow_m3s_[i]);
+    truth[i] = simulate_true(s, recs_[i]);
+  });
+  return simulations_.emplace(std::move(key), std::move(truth)).first->second;
+}
+
+Point Engine::evaluate(const std::vector<EffectAt>& effects, Readings readings) {
   Point p;
-  p.theta = theta;
-  p.prediction = predict(effect, theta);
+  p.theta = effects.empty() ? std::numeric_limits<double>::quiet_NaN() : effects.back().theta;
+  p.prediction = predict(effects, readings);
   p.r = fit_residuals(p.prediction);
   p.cost = std::inner_product(p.r.begin(), p.r.end(), p.r.begin(), 0.0) / static_cast<double>(std::max<std::size_t>(fit_samples_, 1));
   return p;
 }
 
-
-
 EffectResult Engine::explain(const std::string& candidate) {
   const Effect effect = *effect_from_name(candidate);
   if (const std::string why = unsupported_reason(effect, base_); !why.empty()) {
-    EffectResult out = unchanged(effect);
+    EffectResult out = unchanged(effect, nominal_costs_);
     out.note = why;
     out.parameter.value = no_effect_parameter(effect);
     return out;
@@ -276,10 +304,7 @@ double Engine::parameter_std(Effect effect, const Point& best) const {
   if (!(jj > 0.0) || best.r.size() <= 1) return 0.0;
   const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
   const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
-  double slope = 1.0;  // d parameter / d θ
-  if (effect == Effect::gate_rate_limit) slope = best.theta > 0.0 ? 1.0 / (best.theta * best.theta) : 0.0;
-  if (effect == Effect::friction) slope = std::exp(best.theta);
-  return theta_sd * slope;
+  return theta_sd * parameter_per_theta(effect, best.theta);
 }
 
 // Whether the effect moves the calibrated physics by more than calibrated_z standard deviations of
@@ -292,28 +317,26 @@ bool Engine::beyond_calibration(Effect effect, double parameter) const {
   return open == 0.0 || departure(effect, parameter) > open;
 }
 
-// An effect's result before it is fitted: its names, and the nominal model's figures before and
-// after.
-EffectResult Engine::unchanged(Effect effect) const {
+// An effect's result before it is fitted: its names, and the figures of `model` (the nominal
+// one, or an explanation without the effect) before and after.
+EffectResult Engine::unchanged(Effect effect, const Costs& model) const {
   const EffectInfo& e = info(effect);
   EffectResult out;
   out.name = e.name;
   out.parameter.name = e.parameter;
   out.parameter.unit = e.unit;
-  out.cost_before = out.cost_after = balanced(nominal_costs_, false);
-  out.heldout_cost_before = out.heldout_cost_after = balanced(nominal_costs_, true);
-  out.nrmse_before = out.nrmse_after = nominal_costs_.nrmse_fit;
-  out.heldout_nrmse_before = out.heldout_nrmse_after = nominal_costs_.nrmse_heldout;
+  out.cost_before = out.cost_after = balanced(model, false);
+  out.heldout_cost_before = out.heldout_cost_after = balanced(model, true);
+  out.nrmse_before = out.nrmse_after = model.nrmse_fit;
+  out.heldout_nrmse_before = out.heldout_nrmse_after = model.nrmse_heldout;
   return out;
 }
 
-// Scores an effect at its fitted point: costs before and after, held-out score, BIC, material,
-// uncertainty and significance (pipeline.hpp's rule).
-EffectResult Engine::judge(Effect effect, Point best, int sims) {
-  const EffectInfo& e = info(effect);
-  EffectResult out = unchanged(effect);
-  out.simulations = sims;
-  const Costs after = costs(best.prediction);
+// Scores the model `with` the effect (at with.theta) against the model `without` it: costs before
+// and after, held-out score, BIC, material and significance (pipeline.hpp's rule).
+EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without) const {
+  EffectResult out = unchanged(effect, without);
+  const Costs after = costs(with.prediction);
   out.cost_after = balanced(after, false);
   out.heldout_cost_after = balanced(after, true);
   out.nrmse_after = after.nrmse_fit;
@@ -321,13 +344,21 @@ EffectResult Engine::judge(Effect effect, Point best, int sims) {
   out.score = out.heldout_cost_before > 0.0 ? (out.heldout_cost_before - out.heldout_cost_after) / out.heldout_cost_before : 0.0;
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
   out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
-  out.parameter.value = to_parameter(effect, best.theta);
-  out.parameter.std = parameter_std(effect, best);
+  out.parameter.value = to_parameter(effect, with.theta);
   out.material = is_material(effect, out.parameter.value) && beyond_calibration(effect, out.parameter.value);
   // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
   // cost cannot name an effect that fits the upstream channels while the levels downstream —
   // what the verdict is about — get worse (seen on calibrated realistic truths).
   out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, true});
+  return out;
+}
+
+// An effect at its fitted point, judged against the nominal model, with its uncertainty.
+EffectResult Engine::judge(Effect effect, Point best, int sims) {
+  const EffectInfo& e = info(effect);
+  EffectResult out = judged_against(effect, best, nominal_costs_);
+  out.simulations = sims;
+  out.parameter.std = parameter_std(effect, best);
   if (effect == Effect::sensor_quantization) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
     // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <numeric>
 #include <optional>
 
@@ -20,71 +21,44 @@ std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets,
   return out;
 }
 
-using EffectValues = std::vector<std::pair<std::string, double>>;
-
-// The explanation's effects with their parameters, leaving out `skip` ("" = none).
-EffectValues values_of(const std::vector<ExplainedEffect>& explanation, const std::string& skip = "") {
-  EffectValues out;
-  for (const auto& e : explanation) {
-    if (e.name != skip) out.emplace_back(e.name, e.parameter.value);
-  }
-  return out;
-}
-
-// The candidate fitted against the model that carries `others` (nullopt if the engine cannot
-// stack effects).
-std::optional<EffectResult> explain_on_top(const Explainer& explainer, const EffectValues& others,
-                                           const std::string& candidate) {
-  const std::unique_ptr<Explainer> stacked = explainer.with_effects(others);
-  if (!stacked) return std::nullopt;
-  stacked->nominal_residuals();
-  return stacked->explain(candidate);
-}
-
-// Step 5 of the pipeline (header): adds effects to the verdict while the best remaining candidate,
-// fitted against the model corrected by the effects so far, is significant on held-out data; then
-// refits every effect with the others in place.
-void explain_with_several(Explainer& explainer, const PipelineSettings& settings, Diagnosis& d) {
+// Step 5 of the pipeline (header): adds to the verdict, while one is significant, the remaining
+// candidate that most improves the held-out fit when fitted jointly with the effects found so
+// far; the explanation's parameters are those of the last joint fit.
+void explain_with_several(Explainer& explainer, const PipelineSettings& settings, Diagnosis& d,
+                          const std::function<void(const std::string&)>& progress) {
   const EffectResult& verdict = d.effects.front();
   d.explanation.push_back({verdict.name, verdict.parameter, verdict.score, verdict.score});
   std::vector<std::string> remaining;
   for (std::size_t i = 1; i < d.effects.size(); ++i) {
     if (d.effects[i].note.empty() && d.effects[i].score >= settings.stack_min_score) remaining.push_back(d.effects[i].name);
   }
-  std::map<std::string, EffectResult> on_top_of_verdict;
+  std::map<std::string, JointExplanation> with_verdict;
   while (static_cast<int>(d.explanation.size()) < settings.max_effects && !remaining.empty()) {
-    const std::unique_ptr<Explainer> stacked = explainer.with_effects(values_of(d.explanation));
-    if (!stacked) return;
-    stacked->nominal_residuals();
-    std::optional<EffectResult> best;
+    std::optional<JointExplanation> best;
     for (const auto& name : remaining) {
-      EffectResult r = stacked->explain(name);
-      if (d.explanation.size() == 1) on_top_of_verdict[name] = r;
-      if (r.significant && (!best || r.score > best->score)) best = std::move(r);
+      progress(name);
+      std::optional<JointExplanation> joint = explainer.explain_jointly(d.explanation, name);
+      if (!joint) return;  // the engine cannot explain with several effects
+      if (d.explanation.size() == 1) with_verdict[name] = *joint;
+      if (joint->added.significant && (!best || joint->added.score > best->added.score)) best = std::move(joint);
     }
     if (!best) break;
-    remaining.erase(std::find(remaining.begin(), remaining.end(), best->name));
+    remaining.erase(std::find(remaining.begin(), remaining.end(), best->added.name));
     double left = 1.0;  // share of the nominal held-out cost the explanation leaves
     for (const auto& e : d.explanation) left *= 1.0 - std::clamp(e.score, 0.0, 1.0);
-    d.explanation.push_back({best->name, best->parameter, best->score, left * std::clamp(best->score, 0.0, 1.0)});
-  }
-  if (d.explanation.size() > 1) {  // joint refit: each effect against the model with the others
-    const std::vector<ExplainedEffect> found = d.explanation;
-    for (auto& e : d.explanation) {
-      if (auto r = explain_on_top(explainer, values_of(found, e.name), e.name)) e.parameter = r->parameter;
-    }
+    for (std::size_t i = 0; i < d.explanation.size(); ++i) d.explanation[i].parameter = best->refitted.at(i);
+    const EffectResult& added = best->added;
+    d.explanation.push_back({added.name, added.parameter, added.score, left * std::clamp(added.score, 0.0, 1.0)});
   }
   // Ambiguity: a significant runner-up that adds nothing on top of the verdict, while the verdict
   // adds nothing on top of it either — each explains what the other does.
   for (std::size_t i = 1; i < d.effects.size(); ++i) {
     const EffectResult& r = d.effects[i];
     if (!r.significant || r.score < settings.ambiguity_share * verdict.score) continue;
-    const auto on_top = on_top_of_verdict.find(r.name);
+    const auto joint = with_verdict.find(r.name);
     const bool adds = std::any_of(d.explanation.begin(), d.explanation.end(),
                                   [&](const ExplainedEffect& e) { return e.name == r.name; });
-    if (adds || on_top == on_top_of_verdict.end() || on_top->second.significant) continue;
-    const auto reverse = explain_on_top(explainer, {{r.name, r.parameter.value}}, verdict.name);
-    if (!reverse || reverse->significant) continue;
+    if (adds || joint == with_verdict.end() || joint->second.added.significant || joint->second.explanation_adds) continue;
     d.ambiguous.push_back({verdict.name, r.name, verdict.parameter, r.parameter, verdict.score, r.score,
                            separating_experiment(verdict.name, r.name)});
   }
@@ -118,8 +92,8 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
     });
     const std::string corrected = set_verdict(d, settings.none_noise_factor, settings.tolerated_rms) ? d.verdict : "";
     if (!corrected.empty()) {
-      progress(0.95, "explanation");
-      explain_with_several(explainer, settings, d);
+      explain_with_several(explainer, settings, d,
+                           [&](const std::string& candidate) { progress(0.95, "explanation: " + candidate); });
     }
     const auto after = explainer.residuals_with(corrected);
     d.mismatch_after = locate(after, settings.locate);

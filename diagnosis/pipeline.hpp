@@ -5,12 +5,12 @@
 //   2. explain: every candidate effect fitted and judged on held-out data (by the Explainer);
 //   3. rank: significant first, then effects that could be evaluated, then by score;
 //   4. verdict: the best significant effect, else `none` (within the noise) or `unexplained`;
-//   5. explanation with several effects (issue 13): against the model corrected by the effects
-//      found so far, the remaining candidates are fitted again and the best one added while its
-//      held-out gain stays significant; every effect is then refitted with the others in place.
-//      A significant runner-up such that neither it adds to the verdict nor the verdict to it is
-//      reported with the verdict as an ambiguous pair (the recordings cannot tell them apart),
-//      with the experiment that would;
+//   5. explanation with several effects (issue 13): each remaining candidate is fitted jointly
+//      with the effects found so far (all their parameters free) and the best one added while its
+//      held-out gain over the explanation without it stays significant. A significant runner-up
+//      such that neither it adds to the verdict nor the verdict to it is reported with the
+//      verdict as an ambiguous pair (the recordings cannot tell them apart), with the experiment
+//      that would;
 //   6. the corrected prediction of the verdict → locate and test again.
 //
 // An Explainer is the model-specific part: the scenario engine (diagnose.hpp, re-simulating the
@@ -20,6 +20,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -69,6 +70,15 @@ struct AmbiguousPair {
   std::string separating_experiment;
 };
 
+// A candidate fitted jointly with an explanation (Explainer::explain_jointly).
+struct JointExplanation {
+  EffectResult added;                        // judged against the explanation without it
+  std::vector<ParameterEstimate> refitted;   // the explanation's effects, in its order, refitted with it
+  // For an explanation of one effect: that effect is significant on top of the candidate alone
+  // (when neither is on top of the other, the two are an ambiguous pair).
+  bool explanation_adds = false;
+};
+
 // Per-recording series for plots (primary channel, mm).
 struct RecordingSeries {
   std::string name;
@@ -110,10 +120,13 @@ class Explainer {
   virtual std::vector<RecordingSeries> series_with(const std::string& effect) const = 0;
   // Extra figures of the result (the scenario engine's channel scales).
   virtual void describe(Diagnosis&) const {}
-  // The same recordings against the model that already carries `effects` (name, parameter), for
-  // explanations with several effects; nullptr when the engine cannot stack effects.
-  virtual std::unique_ptr<Explainer> with_effects(const std::vector<std::pair<std::string, double>>& /*effects*/) const {
-    return nullptr;
+  // `candidate` added to an explanation of several effects (step 5): fitted jointly with the
+  // explanation's effects — every parameter free, since effects that shift the levels alike
+  // trade off, and one fitted alone absorbs part of the other — and judged against the model
+  // carrying the explanation alone. nullopt when the engine cannot explain with several effects.
+  virtual std::optional<JointExplanation> explain_jointly(const std::vector<ExplainedEffect>& /*explanation*/,
+                                                          const std::string& /*candidate*/) {
+    return std::nullopt;
   }
 };
 

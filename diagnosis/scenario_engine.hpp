@@ -6,6 +6,8 @@
 #pragma once
 
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,11 @@ struct Costs {
 // simulation) and judges it on the held-out part of every recording.
 class Engine final : public Explainer {
  public:
+  // How a prediction reads a quantised level: as the sensor (rounded to the lattice: piecewise
+  // constant in the parameters), or as its expected reading given the model's uncertainty
+  // (calibration::expected_reading: smooth, so that finite-difference Jacobians mean something).
+  enum class Readings { as_sensor, expected };
+
   Engine(const Scenario& base, const std::vector<Recording>& recordings, const DiagnoseOptions& options)
       : base_(base), recordings_(recordings), o_(options) {}
 
@@ -51,7 +58,10 @@ class Engine final : public Explainer {
   std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override;
   std::vector<RecordingSeries> series_with(const std::string& effect) const override;
   void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
-  std::unique_ptr<Explainer> with_effects(const std::vector<std::pair<std::string, double>>& effects) const override;
+  std::optional<JointExplanation> explain_jointly(const std::vector<ExplainedEffect>& explanation,
+                                                  const std::string& candidate) override;
+  // The engine of the same recordings whose nominal model carries `effects` (name, parameter).
+  std::unique_ptr<Engine> with_effects(const std::vector<std::pair<std::string, double>>& effects) const;
 
  private:
   void prepare();
@@ -67,8 +77,16 @@ class Engine final : public Explainer {
   // The scenario that replays recording i: the base with the carried lateral outflow, whose
   // reference is the inflow of the engine that found it.
   Scenario scenario_for(std::size_t i) const;
-  std::vector<Channels> predict(Effect effect, double theta);
-  Point evaluate(Effect effect, double theta);
+  // An effect at a value of its internal coordinate θ (catalog.hpp).
+  struct EffectAt {
+    Effect effect;
+    double theta;
+  };
+  std::vector<Channels> predict(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
+  const std::vector<Channels>& simulated(const std::vector<EffectAt>& hydraulic);
+  // theta = the last effect's
+  Point evaluate(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
+  Point evaluate(Effect effect, double theta) { return evaluate({{effect, theta}}); }
   std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
 
   // The fit of each catalog effect (the effect's parameter θ at its best point).
@@ -79,8 +97,14 @@ class Engine final : public Explainer {
   Point fit_by_secant(Effect effect, const Point& start, int& sims);
   Point rate_limit_from_position(int& sims);
   Point rate_limit_from_levels(int& sims);
-  EffectResult unchanged(Effect effect) const;
+  EffectResult unchanged(Effect effect, const Costs& model) const;
+  EffectResult judged_against(Effect effect, const Point& with, const Costs& without) const;
   EffectResult judge(Effect effect, Point best, int sims);
+  // Explanations with several effects (joint_fit.cpp).
+  struct JointFit;
+  JointFit fit_jointly(std::vector<EffectAt> start, const std::vector<bool>& free);
+  std::optional<JointExplanation> explain_on_top(const std::vector<ExplainedEffect>& explanation,
+                                                 const std::string& candidate) const;
   double parameter_std(Effect effect, const Point& best) const;
   bool beyond_calibration(Effect effect, double parameter) const;
   double lattice_resolution() const;
@@ -104,6 +128,8 @@ class Engine final : public Explainer {
   double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
   std::size_t fit_samples_ = 0;
   std::map<std::string, Point> best_;
+  std::map<std::vector<double>, std::vector<Channels>> simulations_;  // simulated(): by effect and θ
+  int simulations_run_ = 0;          // replays of all recordings simulated() ran
 };
 
 
