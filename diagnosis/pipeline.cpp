@@ -28,9 +28,12 @@ void explain_with_several(Explainer& explainer, const PipelineSettings& settings
                           const std::function<void(const std::string&)>& progress) {
   const EffectResult& verdict = d.effects.front();
   d.explanation.push_back({verdict.name, verdict.parameter, verdict.score, verdict.score});
+  // Every candidate the model can carry is tried, whatever its own score: an effect that
+  // counteracts the verdict's (an outflow beside a leak) has none — fitted alone it sits at its
+  // bound — and shows only in a joint fit.
   std::vector<std::string> remaining;
   for (std::size_t i = 1; i < d.effects.size(); ++i) {
-    if (d.effects[i].note.empty() && d.effects[i].score >= settings.stack_min_score) remaining.push_back(d.effects[i].name);
+    if (d.effects[i].note.empty()) remaining.push_back(d.effects[i].name);
   }
   std::map<std::string, JointExplanation> with_verdict;
   while (static_cast<int>(d.explanation.size()) < settings.max_effects && !remaining.empty()) {

@@ -138,8 +138,6 @@ struct PipelineSettings {
   LocateOptions locate;
   ProgressCallback progress;       // share of the candidates explained, and the candidate
   int max_effects = 3;             // effects in one explanation; 1 = the verdict alone
-  // Candidates tried on top of the verdict: those whose own held-out score reached this.
-  double stack_min_score = 0.05;
   // A significant runner-up whose score reaches this share of the verdict's is ambiguous with it
   // when neither adds significantly on top of the other.
   double ambiguity_share = 0.5;

@@ -19,6 +19,13 @@ namespace {
 
 constexpr double kSettle = 150.0;
 
+// The operating point's steady inflow: lateral_outflow's reference (as the blind test takes it).
+double nominal_inflow_m3s(const scenarios::Scenario& lab, scenarios::ExperimentSpec e) {
+  e.input.kind = scenarios::InputKind::constant;
+  e.duration_s = 2.0;
+  return scenarios::simulate(lab, e).column(columns::discharge).front() * 1e-3;
+}
+
 std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, const std::vector<const char*>& experiments,
                               double duration_s = 80.0) {
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
@@ -31,7 +38,7 @@ std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, con
     sensors.noise_std_mm = 0.05;
     sensors.seed = 17;
     e.sensors = sensors;
-    for (const auto& c : concealed) conceal(c, s, e, 0.0);
+    for (const auto& c : concealed) conceal(c, s, e, nominal_inflow_m3s(lab, e));
     scenarios::SimulateOptions so;
     so.settle_time = kSettle;
     Recording r = scenarios::simulate(s, e, so);
@@ -99,6 +106,25 @@ TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) 
   // Jacobian at the joint optimum).
   EXPECT_GT(leak->parameter.std, 0.0);
   EXPECT_GT(gate->parameter.std, 0.0);
+}
+
+// An outflow along the pool counteracts a leak: fitted alone it sits at its bound (no outflow
+// explains water that is not missing) and has no score of its own; only a joint fit with the leak
+// finds it.
+TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
+  const auto recordings = record({{"gate_leakage", 2.5}, {"lateral_outflow", 0.08}}, {"op1", "op2", "op3", "op4"});
+  const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
+                               options({"gate_leakage", "lateral_outflow", "downstream_gate", "sensor_offset"}));
+  ASSERT_TRUE(d.ok) << d.message;
+  const ExplainedEffect* leak = in_explanation(d, "gate_leakage");
+  const ExplainedEffect* outflow = in_explanation(d, "lateral_outflow");
+  ASSERT_NE(leak, nullptr) << d.verdict << ": " << d.reason;
+  ASSERT_NE(outflow, nullptr) << d.verdict << ": " << d.reason;
+  EXPECT_NEAR(leak->parameter.value, 2.5, 0.1 * 2.5);
+  EXPECT_NEAR(outflow->parameter.value, 0.08, 0.1 * 0.08);
+  for (const auto& e : d.effects) {
+    if (e.name == "lateral_outflow") EXPECT_LT(e.score, 0.05) << "alone, the outflow should explain nothing";
+  }
 }
 
 TEST(Explanation, OneEffectIsExplainedByItselfAlone) {
