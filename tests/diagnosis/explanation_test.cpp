@@ -123,7 +123,9 @@ TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
   EXPECT_NEAR(leak->parameter.value, 2.5, 0.1 * 2.5);
   EXPECT_NEAR(outflow->parameter.value, 0.08, 0.1 * 0.08);
   for (const auto& e : d.effects) {
-    if (e.name == "lateral_outflow") EXPECT_LT(e.score, 0.05) << "alone, the outflow should explain nothing";
+    if (e.name == "lateral_outflow") {
+      EXPECT_LT(e.score, 0.05) << "alone, the outflow should explain nothing";
+    }
   }
 }
 
