@@ -63,6 +63,18 @@ const ExplainedEffect* in_explanation(const Diagnosis& d, const std::string& nam
   return nullptr;
 }
 
+// The explanation's effect `name`, expected there with its parameter within `share` of |truth|
+// (null, with a failure, when it is missing).
+const ExplainedEffect* expect_explained(const Diagnosis& d, const std::string& name, double truth, double share) {
+  const ExplainedEffect* e = in_explanation(d, name);
+  if (!e) {
+    ADD_FAILURE() << name << " is not in the explanation; " << d.verdict << ": " << d.reason;
+    return nullptr;
+  }
+  EXPECT_NEAR(e->parameter.value, truth, share * std::abs(truth)) << name;
+  return e;
+}
+
 TEST(Explanation, NamesBothOfTwoConcealedEffectsWithJointlyRefittedParameters) {
   const auto recordings = record({{"sensor_delay", 1.2}, {"discharge_coefficient", 0.86}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
@@ -95,13 +107,10 @@ TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) 
                                options({"gate_leakage", "downstream_gate", "discharge_coefficient", "friction",
                                         "lateral_outflow", "sensor_offset"}));
   ASSERT_TRUE(d.ok) << d.message;
-  const ExplainedEffect* leak = in_explanation(d, "gate_leakage");
-  const ExplainedEffect* gate = in_explanation(d, "downstream_gate");
-  ASSERT_NE(leak, nullptr) << d.verdict << ": " << d.reason;
-  ASSERT_NE(gate, nullptr) << d.verdict << ": " << d.reason;
   // The diagnosis' own model is the truth here: the joint optimum is the truth itself.
-  EXPECT_NEAR(leak->parameter.value, 2.5, 0.05 * 2.5);
-  EXPECT_NEAR(gate->parameter.value, -1.5, 0.05 * 1.5);
+  const ExplainedEffect* leak = expect_explained(d, "gate_leakage", 2.5, 0.05);
+  const ExplainedEffect* gate = expect_explained(d, "downstream_gate", -1.5, 0.05);
+  ASSERT_TRUE(leak && gate);
   // Each carries the joint fit's own standard deviation (the statistical part: from the
   // Jacobian at the joint optimum).
   EXPECT_GT(leak->parameter.std, 0.0);
@@ -116,12 +125,8 @@ TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
                                options({"gate_leakage", "lateral_outflow", "downstream_gate", "sensor_offset"}));
   ASSERT_TRUE(d.ok) << d.message;
-  const ExplainedEffect* leak = in_explanation(d, "gate_leakage");
-  const ExplainedEffect* outflow = in_explanation(d, "lateral_outflow");
-  ASSERT_NE(leak, nullptr) << d.verdict << ": " << d.reason;
-  ASSERT_NE(outflow, nullptr) << d.verdict << ": " << d.reason;
-  EXPECT_NEAR(leak->parameter.value, 2.5, 0.1 * 2.5);
-  EXPECT_NEAR(outflow->parameter.value, 0.08, 0.1 * 0.08);
+  expect_explained(d, "gate_leakage", 2.5, 0.1);
+  expect_explained(d, "lateral_outflow", 0.08, 0.1);
   for (const auto& e : d.effects) {
     if (e.name == "lateral_outflow") {
       EXPECT_LT(e.score, 0.05) << "alone, the outflow should explain nothing";
