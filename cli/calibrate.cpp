@@ -65,7 +65,7 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
   std::map<std::string, double> deviations;  // [calibration.std]: what diagnose takes as left open
-  for (const auto& p : c.parameters) deviations[p.name] = p.std;
+  for (const auto& p : c.parameters) deviations[p.name] = diagnosis::left_open(p);
   std::string out = "# Calibrated by canalsim calibrate from " + args.scenario + " on" + recordings + "\n" +
                     calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations,
                                                         diagnosis::baseline_rms_of(c, columns::level_downstream_end));

@@ -62,10 +62,16 @@ Status BaselineOptions::validate() const {
   return check.status();
 }
 
+double left_open(const calibration::ParameterEstimate& p) {
+  // Without the grid check the statistical part is the whole deviation.
+  return p.grid_shift > 0.0 || p.statistical_std > 0.0 ? p.statistical_std : p.std;
+}
+
 std::map<std::string, double> calibrated_std_of(const calibration::Calibration& c) {
   std::map<std::string, double> out;
   for (const auto& p : c.parameters) {
-    if (std::isfinite(p.std)) out[p.name] = p.std;
+    const double open = left_open(p);
+    if (std::isfinite(open)) out[p.name] = open;
   }
   return out;
 }

@@ -60,8 +60,16 @@ struct BaselineDiagnosis {
   std::vector<std::string> baseline;       // the baseline recordings' names (their source)
 };
 
-// What a calibration left open, for DiagnoseOptions::calibrated_std: parameter name → one
-// standard deviation, for every parameter whose deviation the data determined (finite).
+// What a calibration leaves open for a diagnosis against the calibrated model: the statistical
+// standard deviation of the estimate (how well the baseline determines it), not its numerical
+// part. The grid shift says how far the value is from the physical parameter, an error that the
+// calibrated model and the diagnosis, on the same grid, share: it is no room for a change of the
+// canal. So `diagnose --scenario cal.toml` judges materiality as `diagnose --baseline` does (whose
+// calibration runs without the grid check). +inf when the data do not determine it.
+double left_open(const calibration::ParameterEstimate& estimate);
+
+// What a calibration left open, for DiagnoseOptions::calibrated_std: parameter name → left_open,
+// for every parameter the data determined (finite).
 std::map<std::string, double> calibrated_std_of(const calibration::Calibration& calibration);
 
 // What the calibration left on its own baseline, for DiagnoseOptions::baseline_rms_mm: the RMS of

@@ -311,7 +311,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
                       {"verdict", t.verdict}, {"correct", t.correct}, {"estimate", num(t.estimate)},
                       {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
-                      {"seconds", t.seconds}, {"message", t.message}, {"named", t.named}});
+                      {"seconds", t.seconds}, {"message", t.message}, {"named", t.named}, {"named_values", t.named_values}});
     if (t.second) {
       trials.back()["second"] = {{"concealed", t.second->effect}, {"value", t.second->value}};
       trials.back()["both_named"] = t.both_named;

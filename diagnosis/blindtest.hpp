@@ -86,6 +86,7 @@ struct Trial {
   std::optional<ConcealedEffect> second;  // two-effect trials
   std::string verdict;
   std::vector<std::string> named;   // the diagnosis' explanation: the verdict and any further effects
+  std::vector<double> named_values; // their jointly refitted parameters, in the catalog's units
   bool both_named = false;          // two-effect trials: both concealed effects are in `named`
   std::string truth_drawn;          // realistic: the perturbed physics of this trial's truth
   double estimate = 0.0;            // the diagnosis' parameter for the true effect's name

@@ -112,7 +112,11 @@ void run_trial(const TrialContext& c, Trial& trial) {
   if (!d.ok) throw std::runtime_error(d.message);
   trial.verdict = d.verdict;
   trial.named.clear();
-  for (const auto& e : d.explanation) trial.named.push_back(e.name);
+  trial.named_values.clear();
+  for (const auto& e : d.explanation) {
+    trial.named.push_back(e.name);
+    trial.named_values.push_back(e.parameter.value);
+  }
   trial.correct = trial.verdict == trial.truth.effect;
   if (trial.second) {
     const auto named = [&](const std::string& e) { return std::find(trial.named.begin(), trial.named.end(), e) != trial.named.end(); };

@@ -333,8 +333,9 @@ EffectResult Engine::unchanged(Effect effect, const Costs& model) const {
 }
 
 // Scores the model `with` the effect (at with.theta) against the model `without` it: costs before
-// and after, held-out score, BIC, material and significance (pipeline.hpp's rule).
-EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without) const {
+// and after, held-out score, BIC, material and significance (pipeline.hpp's rule, with a held-out
+// score of at least `min_score`).
+EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without, double min_score) const {
   EffectResult out = unchanged(effect, without);
   const Costs after = costs(with.prediction);
   out.cost_after = balanced(after, false);
@@ -349,14 +350,14 @@ EffectResult Engine::judged_against(Effect effect, const Point& with, const Cost
   // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
   // cost cannot name an effect that fits the upstream channels while the levels downstream —
   // what the verdict is about — get worse (seen on calibrated realistic truths).
-  out.significant = is_significant(out, {o_.min_score, o_.min_bic_gain, true});
+  out.significant = is_significant(out, {min_score, o_.min_bic_gain, true});
   return out;
 }
 
 // An effect at its fitted point, judged against the nominal model, with its uncertainty.
 EffectResult Engine::judge(Effect effect, Point best, int sims) {
   const EffectInfo& e = info(effect);
-  EffectResult out = judged_against(effect, best, nominal_costs_);
+  EffectResult out = judged_against(effect, best, nominal_costs_, o_.min_score);
   out.simulations = sims;
   out.parameter.std = parameter_std(effect, best);
   if (effect == Effect::sensor_quantization) {
@@ -433,6 +434,8 @@ Status DiagnoseOptions::validate() const {
   check.require(primary.empty() || std::find(channels.begin(), channels.end(), primary) != channels.end(),
                 "channels", "must include the primary channel " + primary);
   check.require(min_score > 0.0 && min_score < 1.0, "min_score", min_score, "(0, 1)");
+  check.require(added_min_score > 0.0 && added_min_score <= min_score, "added_min_score", added_min_score,
+                "(0, min_score]");
   check.require(min_bic_gain >= 0.0, "min_bic_gain", min_bic_gain, ">= 0");
   check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
   check.require(max_evaluations >= 2 && max_evaluations <= 50, "max_evaluations", max_evaluations, "2..50");

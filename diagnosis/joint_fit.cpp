@@ -191,7 +191,7 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
   JointExplanation out;
   Point with = fit.point;
   with.theta = fit.effects.back().theta;
-  out.added = judged_against(added, with, costs(without.prediction));
+  out.added = judged_against(added, with, costs(without.prediction), o_.added_min_score);
   out.added.parameter.std = fit.std_theta.back() * parameter_per_theta(added, with.theta);
   out.added.simulations = fit.simulations;
   for (std::size_t i = 0; i < explanation.size(); ++i) {
@@ -205,7 +205,8 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
     with.theta = fit.effects.front().theta;
     std::vector<EffectAt> candidate_alone = {{added, alone->second.theta}};
     const Point alone_point = evaluate(candidate_alone, kReadings);
-    out.explanation_adds = judged_against(held.front().effect, with, costs(alone_point.prediction)).significant;
+    out.explanation_adds =
+        judged_against(held.front().effect, with, costs(alone_point.prediction), o_.added_min_score).significant;
   }
   return out;
 }

@@ -2,6 +2,8 @@
 // non-zero exit, and writes no output file.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -124,13 +126,25 @@ fs::path short_lab_recording(const fs::path& scratch) {
 TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
   const fs::path scratch = scratch_dir("diagnose_baseline_ok");
   short_lab_recording(scratch);
-  RunResult r = run_canalsim("calibrate --scenario short.toml op3.csv -o cal.toml --params manning_n,offset_y_dwe_mm --starts 1",
-                             scratch);
+  RunResult r = run_canalsim(
+      "calibrate --scenario short.toml op3.csv -o cal.toml --params manning_n,offset_y_dwe_mm --starts 1 --json c.json",
+      scratch);
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string cal = read_text(scratch / "cal.toml");
   const auto table = cal.find("[calibration.std]");
   ASSERT_NE(table, std::string::npos) << cal;
-  EXPECT_NE(cal.find("manning_n = ", table), std::string::npos) << cal;
+  const auto manning = cal.find("manning_n = ", table);
+  ASSERT_NE(manning, std::string::npos) << cal;
+  // What the calibration leaves open for the diagnosis is the statistical deviation: the grid
+  // shift is shared by the calibrated model and the diagnosis on its grid (diagnosis/baseline.hpp).
+  const nlohmann::json report = nlohmann::json::parse(read_text(scratch / "c.json"));
+  for (const auto& p : report["parameters"]) {
+    if (p["name"] != "manning_n") continue;
+    ASSERT_GT(p["numerical_std"].get<double>(), 0.0) << "the grid check ran";
+    const double written = std::stod(cal.substr(manning + std::string("manning_n = ").size()));
+    EXPECT_NEAR(written, p["statistical_std"].get<double>(), 1e-5 * written);
+    EXPECT_LT(written, p["std"].get<double>());
+  }
   EXPECT_NE(cal.find("offset_y_dwe_mm = ", table), std::string::npos) << cal;
   EXPECT_NE(cal.find("[calibration]"), std::string::npos) << cal;
   EXPECT_NE(cal.find("baseline_rms_mm = "), std::string::npos) << cal;

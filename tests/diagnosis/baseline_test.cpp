@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "calibration/scenario_file.hpp"
@@ -34,7 +35,7 @@ scenarios::Scenario perturbed_truth() {
   return s;
 }
 
-std::vector<Recording> record(const std::vector<std::string>& experiments, const ConcealedEffect& effect,
+std::vector<Recording> record(const std::vector<std::string>& experiments, const std::vector<ConcealedEffect>& effects,
                               std::uint64_t seed, const std::string& prefix) {
   const scenarios::Scenario truth = perturbed_truth();
   std::vector<Recording> out;
@@ -46,7 +47,7 @@ std::vector<Recording> record(const std::vector<std::string>& experiments, const
     sensors.noise_std_mm = 0.05;
     sensors.seed = seed++;
     e.sensors = sensors;
-    conceal(effect, s, e, 0.0);
+    for (const ConcealedEffect& effect : effects) conceal(effect, s, e, 0.0);
     scenarios::SimulateOptions so;
     so.settle_time = kSettle;
     so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
@@ -66,9 +67,9 @@ BaselineOptions fast_options() {
 }
 
 TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFalseAlarm) {
-  const std::vector<Recording> baseline = record({"op1", "op3"}, {"none", 0.0}, 21, "base_");
-  const std::vector<Recording> clean = record({"op2", "op4"}, {"none", 0.0}, 31, "");
-  const std::vector<Recording> delayed = record({"op2", "op4"}, {"sensor_delay", 1.0}, 31, "");
+  const std::vector<Recording> baseline = record({"op1", "op3"}, {}, 21, "base_");
+  const std::vector<Recording> clean = record({"op2", "op4"}, {}, 31, "");
+  const std::vector<Recording> delayed = record({"op2", "op4"}, {{"sensor_delay", 1.0}}, 31, "");
   const BaselineOptions o = fast_options();
 
   // Against the scenario as given, the parameter mismatch alone looks like a fault.
@@ -95,6 +96,32 @@ TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFa
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "sensor_delay") << d.reason;
   EXPECT_LE(parameter_error({"sensor_delay", 1.0}, d.effects.front().parameter.value), 0.25);
+}
+
+// Two effects at once in recordings the diagnosis' model did not make: a 2 mm leak under the head
+// gate and the downstream gate 1 mm lower. Both raise the levels, so each alone explains much of
+// the other's residual; the verdict fitted alone absorbs part of the second effect, which then
+// adds only what the first leaves. The joint fit (pipeline step 5) must name both, each within
+// the blind test's 25 %, with their jointly refitted parameters. Measured (2026-11-24): 2.13 and
+// −0.951 mm; the pairs 1.0/−1.0, 1.5/−1.5 and 2.5/−0.7 mm pass too, 0.8/−0.6 mm names the gate
+// only; on two recordings (op2, op4) instead of four the leak came out 28 % high.
+TEST(Baseline, TwoEffectsConcealedInAnotherTruthAreBothNamedWithTheirJointParameters) {
+  const std::vector<Recording> baseline = record({"op1", "op2", "op3", "op4"}, {}, 21, "base_");
+  const std::vector<ConcealedEffect> concealed = {{"gate_leakage", 2.0}, {"downstream_gate", -1.0}};
+  const std::vector<Recording> recordings = record({"op1", "op2", "op3", "op4"}, concealed, 31, "");
+  BaselineOptions o = fast_options();
+  o.diagnosis.candidates = {"gate_leakage", "downstream_gate", "discharge_coefficient", "sensor_offset", "friction"};
+  const BaselineDiagnosis r = diagnose_with_baseline(scenarios::builtin_scenario("lab"), baseline, recordings, o);
+  ASSERT_TRUE(r.diagnosis.ok) << r.diagnosis.message;
+  const auto& explanation = r.diagnosis.explanation;
+  for (const ConcealedEffect& effect : concealed) {
+    const auto found = std::find_if(explanation.begin(), explanation.end(),
+                                    [&](const ExplainedEffect& e) { return e.name == effect.effect; });
+    ASSERT_NE(found, explanation.end()) << effect.effect << " not named; verdict " << r.diagnosis.verdict;
+    EXPECT_LT(parameter_error(effect, found->parameter.value), 0.25)
+        << effect.effect << ": concealed " << effect.value << ", found " << found->parameter.value;
+    EXPECT_GT(found->share, 0.0) << effect.effect;
+  }
 }
 
 TEST(Baseline, ABaselineOfAnotherLoggerOrCanalIsNamedWithTheDifference) {
