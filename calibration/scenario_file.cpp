@@ -92,7 +92,7 @@ std::string with_calibration_table(const std::string& text, const std::map<std::
     out += "\n[calibration]  # canalsim calibrate: what the calibrated model still misses on its baseline\n"
            "baseline_rms_mm = " + format_g(baseline_rms_mm, 6) + "\n";
   }
-  out += "\n[calibration.std]  # one standard deviation of each calibrated parameter (canalsim calibrate);\n"
+  out += "\n[calibration.std]  # one statistical standard deviation of each calibrated parameter (canalsim calibrate);\n"
          "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n";
   for (const auto& [name, sd] : deviations) {
     if (!std::isfinite(sd)) continue;

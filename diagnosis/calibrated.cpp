@@ -48,6 +48,11 @@ double calibration_uncertainty(Effect effect, const scenarios::Scenario& s, cons
   return 0.0;
 }
 
+bool calibration_spanned_by(Effect added, Effect refitted) {
+  return refitted == Effect::discharge_coefficient &&
+         (added == Effect::gate_leakage || added == Effect::lateral_outflow);
+}
+
 double departure(Effect effect, double parameter) {
   if (effect == Effect::friction) return std::abs(std::log(parameter));
   if (effect == Effect::gate_rate_limit) return 0.0;

@@ -334,8 +334,10 @@ EffectResult Engine::unchanged(Effect effect, const Costs& model) const {
 
 // Scores the model `with` the effect (at with.theta) against the model `without` it: costs before
 // and after, held-out score, BIC, material and significance (pipeline.hpp's rule, with a held-out
-// score of at least `min_score`).
-EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without, double min_score) const {
+// score of at least `min_score`). `within_calibration_counts`: the parameter must also exceed what
+// the calibration leaves open (false where a jointly refitted effect spans that, calibrated.hpp).
+EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without, double min_score,
+                                    bool within_calibration_counts) const {
   EffectResult out = unchanged(effect, without);
   const Costs after = costs(with.prediction);
   out.cost_after = balanced(after, false);
@@ -346,7 +348,8 @@ EffectResult Engine::judged_against(Effect effect, const Point& with, const Cost
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
   out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
   out.parameter.value = to_parameter(effect, with.theta);
-  out.material = is_material(effect, out.parameter.value) && beyond_calibration(effect, out.parameter.value);
+  out.material = is_material(effect, out.parameter.value) &&
+                 (!within_calibration_counts || beyond_calibration(effect, out.parameter.value));
   // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
   // cost cannot name an effect that fits the upstream channels while the levels downstream —
   // what the verdict is about — get worse (seen on calibrated realistic truths).
@@ -357,7 +360,7 @@ EffectResult Engine::judged_against(Effect effect, const Point& with, const Cost
 // An effect at its fitted point, judged against the nominal model, with its uncertainty.
 EffectResult Engine::judge(Effect effect, Point best, int sims) {
   const EffectInfo& e = info(effect);
-  EffectResult out = judged_against(effect, best, nominal_costs_, o_.min_score);
+  EffectResult out = judged_against(effect, best, nominal_costs_, o_.min_score, true);
   out.simulations = sims;
   out.parameter.std = parameter_std(effect, best);
   if (effect == Effect::sensor_quantization) {

@@ -18,6 +18,7 @@
 #include <functional>
 #include <numeric>
 
+#include "diagnosis/calibrated.hpp"
 #include "diagnosis/scenario_engine.hpp"
 
 namespace canalsim::diagnosis::scenario_engine {
@@ -191,7 +192,9 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
   JointExplanation out;
   Point with = fit.point;
   with.theta = fit.effects.back().theta;
-  out.added = judged_against(added, with, costs(without.prediction), o_.added_min_score);
+  bool spanned = false;  // by an effect of the explanation, refitted here (calibrated.hpp)
+  for (std::size_t i = 0; i < held.size(); ++i) spanned = spanned || (free[i] && calibration_spanned_by(added, held[i].effect));
+  out.added = judged_against(added, with, costs(without.prediction), o_.added_min_score, !spanned);
   out.added.parameter.std = fit.std_theta.back() * parameter_per_theta(added, with.theta);
   out.added.simulations = fit.simulations;
   for (std::size_t i = 0; i < explanation.size(); ++i) {
@@ -205,8 +208,10 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
     with.theta = fit.effects.front().theta;
     std::vector<EffectAt> candidate_alone = {{added, alone->second.theta}};
     const Point alone_point = evaluate(candidate_alone, kReadings);
+    const bool verdict_spanned = calibration_spanned_by(held.front().effect, added);
     out.explanation_adds =
-        judged_against(held.front().effect, with, costs(alone_point.prediction), o_.added_min_score).significant;
+        judged_against(held.front().effect, with, costs(alone_point.prediction), o_.added_min_score, !verdict_spanned)
+            .significant;
   }
   return out;
 }

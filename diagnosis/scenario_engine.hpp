@@ -98,7 +98,8 @@ class Engine final : public Explainer {
   Point rate_limit_from_position(int& sims);
   Point rate_limit_from_levels(int& sims);
   EffectResult unchanged(Effect effect, const Costs& model) const;
-  EffectResult judged_against(Effect effect, const Point& with, const Costs& without, double min_score) const;
+  EffectResult judged_against(Effect effect, const Point& with, const Costs& without, double min_score,
+                              bool within_calibration_counts) const;
   EffectResult judge(Effect effect, Point best, int sims);
   // Explanations with several effects (joint_fit.cpp).
   struct JointFit;

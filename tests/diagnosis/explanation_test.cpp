@@ -180,6 +180,27 @@ TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
   EXPECT_NE(calibrated.verdict, "downstream_gate");
 }
 
+// A calibration that knows the discharge coefficients to 2 % (3 std × 2 % × the mean operating
+// opening of 32 mm ≈ 1.9 mm of leak) leaves a 1 mm leak within its tolerance — alone. Beside a
+// discharge coefficient 15 % low the joint fit refits that coefficient freely, so its calibrated
+// error is a parameter of the fit and no longer room for the leak (calibration_spanned_by): both
+// are named.
+TEST(Explanation, ALeakBesideAFreeDischargeCoefficientIsNotJudgedAgainstTheCoefficientsTolerance) {
+  const auto recordings = record({{"discharge_coefficient", 0.85}, {"gate_leakage", 1.0}}, {"op1", "op2", "op3", "op4"});
+  DiagnoseOptions o = options({"discharge_coefficient", "gate_leakage", "downstream_gate", "sensor_offset"});
+  const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
+  o.calibrated_std = {{"cd_free", 0.02 * lab.head_gate->discharge_coefficient},
+                      {"cd_submerged", 0.02 * lab.head_gate->submerged_coefficient()}};
+  ASSERT_GT(3.0 * calibration_uncertainty(Effect::gate_leakage, lab, o.calibrated_std, 32.0), 1.0);
+  const Diagnosis d = diagnose(lab, recordings, o);
+  ASSERT_TRUE(d.ok) << d.message;
+  EXPECT_EQ(d.verdict, "discharge_coefficient") << d.reason;
+  expect_explained(d, "discharge_coefficient", 0.85, 0.25 * 0.15 / 0.85);  // 25 % of the departure
+  expect_explained(d, "gate_leakage", 1.0, 0.25);
+  EXPECT_TRUE(calibration_spanned_by(Effect::gate_leakage, Effect::discharge_coefficient));
+  EXPECT_FALSE(calibration_spanned_by(Effect::discharge_coefficient, Effect::gate_leakage));
+}
+
 TEST(CalibrationUncertainty, MapsCalibratedParametersOntoEffectUnits) {
   scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   lab.head_gate->discharge_coefficient = 0.5;
