@@ -49,8 +49,7 @@ double calibration_uncertainty(Effect effect, const scenarios::Scenario& s, cons
 }
 
 bool calibration_spanned_by(Effect added, Effect refitted) {
-  return refitted == Effect::discharge_coefficient &&
-         (added == Effect::gate_leakage || added == Effect::lateral_outflow);
+  return refitted == Effect::discharge_coefficient && added == Effect::gate_leakage;
 }
 
 double departure(Effect effect, double parameter) {

@@ -199,6 +199,7 @@ TEST(Explanation, ALeakBesideAFreeDischargeCoefficientIsNotJudgedAgainstTheCoeff
   expect_explained(d, "gate_leakage", 1.0, 0.25);
   EXPECT_TRUE(calibration_spanned_by(Effect::gate_leakage, Effect::discharge_coefficient));
   EXPECT_FALSE(calibration_spanned_by(Effect::discharge_coefficient, Effect::gate_leakage));
+  EXPECT_FALSE(calibration_spanned_by(Effect::lateral_outflow, Effect::discharge_coefficient));
 }
 
 TEST(CalibrationUncertainty, MapsCalibratedParametersOntoEffectUnits) {
