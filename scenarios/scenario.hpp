@@ -59,7 +59,9 @@ struct GateSpec {
   double max_opening_m = 0.05;      // mechanical range [0, max]
   double opening_m = 0.0;           // initial (or fixed) opening
   GateLaw law = GateLaw::swamee;
-  double discharge_coefficient = 1.0;  // multiplier on Swamee's law; Cd of the simple laws
+  // Multiplier on the law's published coefficient: Swamee's, or Cd = 0.6 of the simple laws
+  // (scenarios/design.cpp gate_geometry).
+  double discharge_coefficient = 1.0;
   // The multiplier in submerged flow (gates/sluice_gate.hpp); unset = discharge_coefficient.
   std::optional<double> submerged_discharge_coefficient;
   double submerged_coefficient() const { return submerged_discharge_coefficient.value_or(discharge_coefficient); }

@@ -1,6 +1,7 @@
 #include "scenarios/variation.hpp"
 
 #include "core/format.hpp"
+#include "gates/sluice_gate.hpp"
 
 namespace canalsim::scenarios {
 namespace {
@@ -24,12 +25,18 @@ Scenario independent_truth(Scenario s, const TruthVariation& v) {
   if (v.swap_limiter) s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter;
   s.numerics.cfl = v.cfl;
   if (v.simple_gate_laws) {
+    // A scenario's coefficient multiplies the law's published one (scenarios/design.cpp
+    // gate_geometry), for the simple laws Cd = 0.6: the truth's Cd becomes that multiplier. The
+    // submerged multiplier is the same (eqs. 9 and 11 share Cd), so it is unset.
+    const double multiplier = v.simple_discharge_coefficient / gates::SluiceGateOptions{}.simple_discharge_coefficient;
     const auto simplify = [&](GateSpec& g) {
       g.law = GateLaw::simple;
-      g.discharge_coefficient = v.simple_discharge_coefficient;
+      g.discharge_coefficient = multiplier;
+      g.submerged_discharge_coefficient.reset();
     };
     if (s.head_gate) simplify(*s.head_gate);
     for (auto& g : s.gates) simplify(g);
+    if (s.downstream.kind == DownstreamKind::gate) simplify(s.downstream.gate);
   }
   return s;
 }

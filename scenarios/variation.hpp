@@ -23,7 +23,9 @@ struct TruthVariation {
   int cells_factor = 4;           // cells of every pool multiplied by this
   bool swap_limiter = true;       // van Leer <-> minmod
   double cfl = 0.45;              // Courant number of the truth
-  bool simple_gate_laws = false;  // the paper's eqs. 9/11 with a discharge coefficient
+  // The paper's eqs. 9/11 at every gate (head, between pools, downstream), free and submerged
+  // with one discharge coefficient Cd (not a multiplier: the truth's gates pass Cd a sqrt(2 g h)).
+  bool simple_gate_laws = false;
   double simple_discharge_coefficient = 0.6;
 };
 

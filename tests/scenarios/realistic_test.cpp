@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include "gates/sluice_gate.hpp"
 #include "scenarios/builtin.hpp"
+#include "scenarios/design.hpp"
 
 namespace canalsim::testing {
 namespace {
@@ -60,6 +62,15 @@ TEST(IndependentTruth, DiffersInGridLimiterCourantAndOptionallyGateLaw) {
   EXPECT_EQ(truth.numerics.cfl, 0.45);
   ASSERT_TRUE(truth.head_gate.has_value());
   EXPECT_EQ(truth.head_gate->law, scenarios::GateLaw::simple);
+  // Both gates pass the paper's eq. 9 with Cd = 0.6 in free flow and eq. 11 in submerged flow,
+  // by hand: q = 0.6 a sqrt(2 g h) per unit width.
+  const double a = 0.02, y1 = 0.06, y3 = 0.055, g = 9.81;
+  for (const scenarios::GateSpec* gate : {&*truth.head_gate, &truth.downstream.gate}) {
+    const gates::SluiceGate law(scenarios::gate_geometry(*gate).law);
+    EXPECT_NEAR(law.discharge(y1, 0.0, a), 0.6 * a * std::sqrt(2.0 * g * y1), 1e-12);
+    ASSERT_EQ(gates::classify_regime(y1, y3, a), gates::GateRegime::submerged);
+    EXPECT_NEAR(law.discharge(y1, y3, a), 0.6 * a * std::sqrt(2.0 * g * (y1 - y3)), 1e-12);
+  }
 }
 
 }  // namespace
