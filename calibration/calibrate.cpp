@@ -16,6 +16,7 @@
 #include "calibration/statistics.hpp"
 #include "core/errors.hpp"
 #include "core/format.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::calibration {
 namespace {
@@ -334,36 +335,33 @@ Status CalibrateOptions::validate() const {
       .require(replay.fit_fraction > 0.0 && replay.fit_fraction <= 1.0, "replay.fit_fraction", replay.fit_fraction,
                "(0, 1]")
       .require(replay.warmup_s >= 0.0, "replay.warmup_s", replay.warmup_s, ">= 0")
+      .require(std::set<scenarios::GateLaw>(gate_laws.begin(), gate_laws.end()).size() == gate_laws.size(), "gate_laws",
+               "each law at most once")
       .status();
 }
 
-Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& recordings,
-                      const std::vector<Recording>& validation, const CalibrateOptions& o) {
-  if (const Status status = o.validate(); !status) throw InputError("calibrate options: " + status.message());
-  std::vector<Recording> all = recordings;
-  all.insert(all.end(), validation.begin(), validation.end());
-  std::vector<std::string> problems = check_recordings(scenario, all);
-  for (auto& p : other_canal_problems(scenario, all)) problems.push_back(std::move(p));
-  if (!problems.empty()) {
-    std::string line;
-    for (const auto& p : problems) line += (line.empty() ? "" : "; ") + p;
-    throw InputError(line);
-  }
-  if (recordings.empty()) throw InputError("no recordings to calibrate on");
-  const bool replayed = o.replay.use_recorded_upstream && recordings.front().has(columns::upstream_level);
-  const std::vector<std::string> specs =
-      o.parameters.empty() ? default_parameters(scenario, recordings, replayed) : o.parameters;
-  std::vector<Parameter> parameters = select_parameters(scenario, specs);
+namespace {
 
-  const auto started = std::chrono::steady_clock::now();
-  Calibration c;
-  c.calibrated = scenario;
+// The replay of a calibration of `parameters`: the actuator speed shows in the gate position, so
+// that is compared when the speed is fitted.
+ReplayOptions replay_for(const std::vector<Parameter>& parameters, const CalibrateOptions& o) {
   ReplayOptions replay = o.replay;
-  // The actuator speed shows in the gate position: compare it when that is fitted.
   const bool speed = std::any_of(parameters.begin(), parameters.end(), [](const Parameter& p) { return p.name == "actuator_speed_mm_s"; });
   if (speed && std::find(replay.channels.begin(), replay.channels.end(), columns::gate_position) == replay.channels.end()) {
     replay.channels.push_back(columns::gate_position);
   }
+  return replay;
+}
+
+// One calibration of the scenario's parameters named by `specs` (the recordings checked).
+Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording>& recordings,
+                           const std::vector<Recording>& validation, const std::vector<std::string>& specs,
+                           const CalibrateOptions& o) {
+  std::vector<Parameter> parameters = select_parameters(scenario, specs);
+  const auto started = std::chrono::steady_clock::now();
+  Calibration c;
+  c.calibrated = scenario;
+  ReplayOptions replay = replay_for(parameters, o);
   WarningOncePerRecording warn_once(o.replay.warning);
   replay.warning = [&warn_once](const std::string& message) { warn_once(message); };
   ReplayProblem fit(scenario, parameters, recordings, replay, o.threads);
@@ -459,6 +457,111 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
   c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (o.progress) o.progress({1.0, "done"});
   return c;
+}
+
+// The "before" figures of `c` — cost, RMS and Nrmse per recording and channel, the nominal
+// series — replaced by those of `given`, the scenario as the user gave it (c was calibrated on
+// it with another gate law).
+void restate_before(Calibration& c, const Scenario& given, const std::vector<std::string>& specs,
+                    const std::vector<Recording>& recordings, const std::vector<Recording>& validation,
+                    const CalibrateOptions& o) {
+  const std::vector<Parameter> parameters = select_parameters(given, specs);
+  const ReplayOptions replay = replay_for(parameters, o);
+  const auto restate = [&c](ReplayProblem& problem, bool validation_set) {
+    const std::vector<Channels> nominal = problem.predict(problem.start());
+    for (std::size_t i = 0; i < problem.replays().size(); ++i) {
+      const Replay& r = problem.replays()[i];
+      for (ChannelFit& f : c.fits) {
+        if (f.recording != r.name || f.validation != validation_set || !nominal[i].count(f.channel)) continue;
+        f.rms_before = rms(r.data.at(f.channel), nominal[i].at(f.channel));
+        f.nrmse_before = nrmse_percent(r.data.at(f.channel), nominal[i].at(f.channel));
+      }
+      for (Series& series : c.series) {
+        if (series.recording == r.name && series.validation == validation_set && nominal[i].count(series.channel)) {
+          series.nominal = nominal[i].at(series.channel);
+        }
+      }
+    }
+    c.simulations += problem.simulations();
+    return nominal;
+  };
+  ReplayProblem fit(given, parameters, recordings, replay, o.threads);
+  c.cost_before = cost_per_sample(fit.residuals(restate(fit, false)));
+  if (!validation.empty()) {
+    ReplayProblem check(given, parameters, validation, replay, o.threads, &fit.weights());
+    restate(check, true);
+  }
+}
+
+// CalibrateOptions::gate_laws: one calibration per law, the lowest cost kept.
+Calibration compare_gate_laws(const Scenario& scenario, const std::vector<Recording>& recordings,
+                              const std::vector<Recording>& validation, const std::vector<std::string>& specs,
+                              const CalibrateOptions& o) {
+  const auto started = std::chrono::steady_clock::now();
+  const std::size_t n = o.gate_laws.size();
+  Calibration best;
+  best.ok = false;
+  std::vector<GateLawFit> laws;
+  int simulations = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const scenarios::GateLaw law = o.gate_laws[k];
+    const Scenario with_law = scenarios::with_gate_law(scenario, law);
+    CalibrateOptions one = o;
+    if (o.progress) {
+      one.progress = [&o, k, n, law](const ProgressReport& p) {
+        o.progress({(static_cast<double>(k) + std::max(p.fraction, 0.0)) / static_cast<double>(n),
+                    std::string("gate law ") + scenarios::to_string(law) + ": " + p.message});
+      };
+    }
+    Calibration c = calibrate_with(with_law, recordings, validation, specs, one);
+    simulations += c.simulations;
+    laws.push_back({law, c.ok, c.cost_after, c.message, false});
+    if (c.ok && (!best.ok || c.cost_after < best.cost_after)) {
+      best = std::move(c);
+      for (auto& l : laws) l.kept = false;
+      laws.back().kept = true;
+    } else if (!best.ok && best.message.empty()) {
+      best.message = std::string("gate law ") + scenarios::to_string(law) + ": " + c.message;
+    }
+  }
+  best.simulations = simulations;
+  if (best.ok) {
+    try {
+      restate_before(best, scenario, specs, recordings, validation, o);
+    } catch (const std::exception& e) {
+      best.warnings.push_back(std::string("the scenario as given could not be replayed (") + e.what() +
+                              "): the figures before are those of the kept gate law at the start");
+    }
+  }
+  best.gate_laws = std::move(laws);
+  best.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return best;
+}
+
+}  // namespace
+
+Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& recordings,
+                      const std::vector<Recording>& validation, const CalibrateOptions& o) {
+  if (const Status status = o.validate(); !status) throw InputError("calibrate options: " + status.message());
+  std::vector<Recording> all = recordings;
+  all.insert(all.end(), validation.begin(), validation.end());
+  std::vector<std::string> problems = check_recordings(scenario, all);
+  for (auto& p : other_canal_problems(scenario, all)) problems.push_back(std::move(p));
+  if (!problems.empty()) {
+    std::string line;
+    for (const auto& p : problems) line += (line.empty() ? "" : "; ") + p;
+    throw InputError(line);
+  }
+  if (recordings.empty()) throw InputError("no recordings to calibrate on");
+  if (!o.gate_laws.empty() && !scenarios::has_sluice_gate(scenario)) {
+    throw InputError("gate laws to compare, but scenario " + scenario.source + " has no sluice gate");
+  }
+  const bool replayed = o.replay.use_recorded_upstream && recordings.front().has(columns::upstream_level);
+  const std::vector<std::string> specs =
+      o.parameters.empty() ? default_parameters(scenario, recordings, replayed) : o.parameters;
+  select_parameters(scenario, specs);  // bad specs: one line before any work
+  if (o.gate_laws.empty()) return calibrate_with(scenario, recordings, validation, specs, o);
+  return compare_gate_laws(scenario, recordings, validation, specs, o);
 }
 
 }  // namespace canalsim::calibration

@@ -55,6 +55,11 @@ struct CalibrateOptions {
   // The grid check and the numerical uncertainty: re-estimate the optimum on other numerics
   // (discretisation.hpp; 6 simulations per recording, two of them on twice the cells).
   bool grid_check = true;
+  // Gate laws to compare: each is put at every sluice gate of the scenario
+  // (scenarios/variation.hpp with_gate_law) and calibrated in turn, and the one with the lowest
+  // weighted cost is kept — whether the recordings follow Swamee's law or the paper's simpler
+  // eqs. 9/11. Empty (the default): the scenario's own laws, one calibration.
+  std::vector<scenarios::GateLaw> gate_laws;
   ProgressCallback progress;
   [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
   static ReplayOptions default_replay();
@@ -113,6 +118,15 @@ struct Series {
   std::vector<double> t, recorded, nominal, calibrated;
 };
 
+// One gate law of CalibrateOptions::gate_laws, calibrated.
+struct GateLawFit {
+  scenarios::GateLaw law = scenarios::GateLaw::swamee;
+  bool ok = false;
+  double cost_after = 0.0;   // weighted cost per sample at its optimum
+  std::string message;       // why it failed, when !ok
+  bool kept = false;         // the calibration reported is this law's
+};
+
 struct Calibration {
   bool ok = true;
   std::string message;       // why it failed, when !ok
@@ -136,6 +150,9 @@ struct Calibration {
   // starts from time marching, and the warning names that state). Each was also passed to
   // options.replay.warning, or printed on stderr when it is unset.
   std::vector<std::string> warnings;
+  // The gate laws compared (CalibrateOptions::gate_laws), empty when none were; `calibrated`
+  // carries the kept one, and the "before" figures stay those of the scenario as given.
+  std::vector<GateLawFit> gate_laws;
   scenarios::Scenario calibrated;
 };
 

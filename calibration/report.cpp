@@ -28,6 +28,15 @@ std::string std_text(const ParameterEstimate& p) {
 
 }  // namespace
 
+std::string gate_law_lines(const Calibration& c) {
+  std::string out = "gate laws compared (each calibrated; the lowest cost kept):\n";
+  for (const auto& l : c.gate_laws) {
+    out += "  " + pad(scenarios::to_string(l.law), 8) +
+           (l.ok ? "cost per sample " + format_g(l.cost_after, 4) : "failed: " + l.message) + (l.kept ? "  (kept)" : "") + "\n";
+  }
+  return out;
+}
+
 std::string text_summary(const Calibration& c) {
   std::ostringstream out;
   if (!c.ok) {
@@ -77,6 +86,7 @@ std::string text_summary(const Calibration& c) {
   out << "\nweighted cost per sample " << format_g(c.cost_before, 4) << " -> " << format_g(c.cost_after, 4)
       << "; residual autocorrelation inflates the variances " << format_fixed(c.inflation, 1) << "x\n";
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
+  if (!c.gate_laws.empty()) out << gate_law_lines(c);
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
   if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
@@ -122,6 +132,13 @@ nlohmann::json to_json(const Calibration& c) {
   for (const auto& d : c.discretisation) {
     j["discretisation"].push_back({{"numerics", d.name}, {"weight", d.weight}, {"shift", d.shift},
                                    {"linear_response", d.linear_response}, {"cost", d.cost}});
+  }
+  j["gate_laws"] = json::array();
+  for (const auto& l : c.gate_laws) {
+    json entry = {{"law", scenarios::to_string(l.law)}, {"ok", l.ok}, {"kept", l.kept}};
+    if (l.ok) entry["cost_after"] = l.cost_after;
+    if (!l.ok) entry["message"] = l.message;
+    j["gate_laws"].push_back(entry);
   }
   j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;

@@ -13,6 +13,8 @@ namespace canalsim::calibration {
 // channel before and after; the grid check; simulations and time.
 std::string text_summary(const Calibration& c);
 nlohmann::json to_json(const Calibration& c);
+// The gate laws compared (CalibrateOptions::gate_laws), one line each, the kept one marked.
+std::string gate_law_lines(const Calibration& c);
 std::string html_report(const Calibration& c, const std::string& title);
 
 }  // namespace canalsim::calibration

@@ -43,7 +43,8 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
     const auto dot = e.key.rfind('.');
     const std::string table = dot == std::string::npos ? "" : e.key.substr(0, dot);
     const std::string key = e.key.substr(dot == std::string::npos ? 0 : dot + 1);
-    const std::string written = key + " = " + format_g(e.value, 10) + (e.comment.empty() ? "" : "  # " + e.comment);
+    const std::string shown = e.text.empty() ? format_g(e.value, 10) : e.text;
+    const std::string written = key + " = " + shown + (e.comment.empty() ? "" : "  # " + e.comment);
     std::map<std::string, int> counts;
     std::string current;
     long header = table.empty() ? -1 : -2;  // line index of the table's header; -1 = the root table

@@ -15,6 +15,7 @@ struct KeyEdit {
   std::string key;
   double value = 0.0;
   std::string comment;   // written after the value as "# comment"
+  std::string text;      // a value written as it is ("\"simple\""), instead of `value`, when not empty
 };
 
 // The TOML text with every edit applied: the key's line replaced where the table holds it,

@@ -1,5 +1,5 @@
 // `canalsim calibrate --scenario S REC... -o OUT.toml [--params P,...] [--validate REC...]
-// [--json F] [--report F.html] [--threads N]`: fits scenario parameters to recordings
+// [--gate-laws L,...] [--json F] [--report F.html] [--threads N]`: fits scenario parameters to recordings
 // (calibration/calibrate.hpp; docs/calibration.md), prints the table and writes the calibrated
 // scenario — the input file (or built-in text) with the calibrated keys replaced, each with its
 // standard deviation in a comment. Outputs are checked before the work and written atomically
@@ -28,7 +28,7 @@ namespace {
 
 struct CalibrateArguments {
   std::string scenario;
-  std::vector<std::string> recordings, validation, params, channels;
+  std::vector<std::string> recordings, validation, params, channels, gate_laws;
   std::string out, json, report;
   int threads = 2;
   int starts = 2;
@@ -50,6 +50,31 @@ std::vector<Recording> read_all(const std::vector<std::string>& files) {
   return out;
 }
 
+// The scenario key of every sluice gate's law ("head_gate.law", "gates[2].law",
+// "downstream.gate.law"; scenario_file.hpp) with the law it holds.
+std::vector<std::pair<std::string, scenarios::GateLaw>> gate_law_keys(const scenarios::Scenario& s) {
+  std::vector<std::pair<std::string, scenarios::GateLaw>> keys;
+  if (s.head_gate) keys.emplace_back("head_gate.law", s.head_gate->law);
+  for (std::size_t i = 0; i < s.gates.size(); ++i) keys.emplace_back("gates[" + std::to_string(i + 1) + "].law", s.gates[i].law);
+  if (s.downstream.kind == scenarios::DownstreamKind::gate) keys.emplace_back("downstream.gate.law", s.downstream.gate.law);
+  return keys;
+}
+
+// The laws a calibration compared, as its calibrated scenario carries them; none when it compared none.
+std::vector<std::pair<std::string, scenarios::GateLaw>> gate_law_keys(const calibration::Calibration& c) {
+  return c.gate_laws.empty() ? std::vector<std::pair<std::string, scenarios::GateLaw>>{} : gate_law_keys(c.calibrated);
+}
+
+// "swamee: cost 0.18; simple: cost 0.031"
+std::string compared_laws(const calibration::Calibration& c) {
+  std::string text;
+  for (const auto& l : c.gate_laws) {
+    text += (text.empty() ? "" : "; ") + std::string(scenarios::to_string(l.law)) + ": " +
+            (l.ok ? "cost " + format_g(l.cost_after, 3) : "failed");
+  }
+  return text;
+}
+
 // The calibrated scenario file: the input text with every parameter's key replaced. Parsed back
 // and compared with the calibration, so a file that would not read back is never written.
 std::string calibrated_toml(const std::string& text, const calibration::Calibration& c, const CalibrateArguments& args) {
@@ -60,7 +85,12 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
     const std::string converged = c.grid.done ? "; grid-converged " + format_g(p.converged, 6) : "";
     edits.push_back({p.key, p.value * p.key_scale,
                      "calibrated: " + p.name + " = " + format_g(p.value, 6) + " " + spread + " " + p.unit + " (was " +
-                         format_g(p.start, 6) + converged + ")"});
+                         format_g(p.start, 6) + converged + ")",
+                     ""});
+  }
+  for (const auto& [key, law] : gate_law_keys(c)) {
+    edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")",
+                     "\"" + std::string(scenarios::to_string(law)) + "\""});
   }
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
@@ -79,6 +109,7 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
                                ", expected " + format_g(c.parameters[j].value));
     }
   }
+  if (!c.gate_laws.empty() && gate_law_keys(back) != gate_law_keys(c.calibrated)) throw std::runtime_error("calibrated scenario: the gate laws do not read back");
   return out;
 }
 
@@ -106,6 +137,9 @@ int run(const CalibrateArguments& args) {
   if (!args.channels.empty()) options.replay.channels = args.channels;
   options.threads = args.threads;
   options.starts = args.starts;
+  for (const auto& law : args.gate_laws) {
+    options.gate_laws.push_back(law == "swamee" ? scenarios::GateLaw::swamee : scenarios::GateLaw::simple);
+  }
   ProgressLine progress("calibrating " + s.name);
   options.progress = progress.callback();
   std::vector<std::string> warnings;
@@ -151,6 +185,11 @@ void add_calibrate_command(CLI::App& app) {
                   "lacks are skipped)")
       ->delimiter(',')
       ->check(CLI::IsMember({"y_dwe_mm", "y_dw_mm", "y_up_mm", "x_up_mm", "q_lps"}));
+  cmd->add_option("--gate-laws", args->gate_laws,
+                  "Gate laws to compare, comma-separated: each is put at every sluice gate and calibrated, the best "
+                  "kept (swamee: Swamee 1992; simple: the paper's eqs. 9/11; default: the scenario's own)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"swamee", "simple"}));
   cmd->add_option("--validate", args->validation, "Recordings to check the calibration on, not fitted");
   cmd->add_option("--json", args->json, "Write the calibration as JSON");
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");

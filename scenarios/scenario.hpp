@@ -52,6 +52,7 @@ struct PoolSpec {
 };
 
 enum class GateLaw { swamee, simple };
+inline const char* to_string(GateLaw law) { return law == GateLaw::swamee ? "swamee" : "simple"; }  // as in TOML
 
 // A sluice gate (Swamee 1992, or the paper's eq. 9/11 with a discharge coefficient).
 struct GateSpec {

@@ -3,6 +3,8 @@
 #include "core/format.hpp"
 #include "gates/sluice_gate.hpp"
 
+#include <utility>
+
 namespace canalsim::scenarios {
 namespace {
 
@@ -12,6 +14,13 @@ double uniform_within(std::mt19937_64& rng, double tolerance) {
 
 void note(std::string* drawn, const std::string& line) {
   if (drawn) *drawn += (drawn->empty() ? "" : "; ") + line;
+}
+
+template <class Edit>
+void for_each_sluice_gate(Scenario& s, Edit edit) {
+  if (s.head_gate) edit(*s.head_gate);
+  for (auto& g : s.gates) edit(g);
+  if (s.downstream.kind == DownstreamKind::gate) edit(s.downstream.gate);
 }
 
 }  // namespace
@@ -29,16 +38,22 @@ Scenario independent_truth(Scenario s, const TruthVariation& v) {
     // gate_geometry), for the simple laws Cd = 0.6: the truth's Cd becomes that multiplier. The
     // submerged multiplier is the same (eqs. 9 and 11 share Cd), so it is unset.
     const double multiplier = v.simple_discharge_coefficient / gates::SluiceGateOptions{}.simple_discharge_coefficient;
-    const auto simplify = [&](GateSpec& g) {
-      g.law = GateLaw::simple;
+    s = with_gate_law(std::move(s), GateLaw::simple);
+    for_each_sluice_gate(s, [multiplier](GateSpec& g) {
       g.discharge_coefficient = multiplier;
       g.submerged_discharge_coefficient.reset();
-    };
-    if (s.head_gate) simplify(*s.head_gate);
-    for (auto& g : s.gates) simplify(g);
-    if (s.downstream.kind == DownstreamKind::gate) simplify(s.downstream.gate);
+    });
   }
   return s;
+}
+
+Scenario with_gate_law(Scenario s, GateLaw law) {
+  for_each_sluice_gate(s, [law](GateSpec& g) { g.law = law; });
+  return s;
+}
+
+bool has_sluice_gate(const Scenario& s) {
+  return s.head_gate || !s.gates.empty() || s.downstream.kind == DownstreamKind::gate;
 }
 
 Scenario perturb_uncertain(Scenario s, const UncertainTolerances& t, std::mt19937_64& rng, std::string* drawn) {

@@ -31,6 +31,12 @@ struct TruthVariation {
 
 Scenario independent_truth(Scenario s, const TruthVariation& v = {});
 
+// The scenario with `law` at every sluice gate (head, between pools, downstream), coefficients
+// unchanged (they multiply the law's published one). Calibration compares laws with it.
+Scenario with_gate_law(Scenario s, GateLaw law);
+// Whether the scenario has a sluice gate a law applies to.
+bool has_sluice_gate(const Scenario& s);
+
 // Tolerances of the physics a laboratory does not know (each drawn uniformly within ±).
 struct UncertainTolerances {
   double discharge_coefficient = 0.05;  // relative, free and submerged drawn independently

@@ -34,7 +34,8 @@ TEST(Calibrate, BadInputIsOneLineAndWritesNothing) {
   const std::size_t with_other = before + 1;
   for (const Case& c : {Case{"--params cd_fre", "unknown parameter 'cd_fre'"},
                         Case{"--params cd_free:1.2:1.5", "outside its bounds [1.2, 1.5]"},
-                        Case{"--params manning_n:abc:1", "bound 'abc' is not a number"}}) {
+                        Case{"--params manning_n:abc:1", "bound 'abc' is not a number"},
+                        Case{"--gate-laws swamee,linear", "linear"}}) {
     const RunResult r = run_canalsim("calibrate --scenario lab " + rec.string() + " -o keep.toml " + c.args, scratch);
     EXPECT_TRUE(is_one_error_line(r)) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
@@ -66,6 +67,37 @@ TEST(Calibrate, WritesAScenarioThatSimulateReadsWithEachValueAndItsStd) {
   EXPECT_NE(read_text(scratch / "cal.json").find("\"converged_value\""), std::string::npos);
   const RunResult sim = run_canalsim("simulate cal.toml -e op3 -o again.csv", scratch);
   EXPECT_EQ(sim.code, 0) << sim.err;
+  fs::remove_all(scratch);
+}
+
+// --gate-laws: a recording made with the paper's simple laws at both gates (op1, submerged flow)
+// is fitted better by them; the calibrated scenario names the law at each gate and reads back.
+TEST(Calibrate, ComparingGateLawsWritesTheKeptLawAtEveryGate) {
+  const fs::path scratch = scratch_dir("calibrate_laws");
+  // The built-in lab names Swamee's law at the head gate and leaves the downstream gate's default.
+  std::string simple = run_canalsim("scenarios --show lab", scratch).out;
+  ASSERT_NE(simple.find("law = \"swamee\""), std::string::npos);
+  ASSERT_NE(simple.find("[downstream.gate]\n"), std::string::npos);
+  simple.replace(simple.find("law = \"swamee\""), 14, "law = \"simple\"");
+  simple.replace(simple.find("[downstream.gate]\n"), 18, "[downstream.gate]\nlaw = \"simple\"\n");
+  std::ofstream(scratch / "simple.toml") << simple;
+  const RunResult sim = run_canalsim("simulate simple.toml -e op1 -o op1.csv", scratch);
+  ASSERT_EQ(sim.code, 0) << sim.err;
+  const RunResult r = run_canalsim("calibrate --scenario lab op1.csv -o cal.toml --params cd_free,cd_submerged "
+                                   "--gate-laws swamee,simple --starts 1 --json cal.json",
+                                   scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("gate laws compared"), std::string::npos) << r.out;
+  const std::string toml = read_text(scratch / "cal.toml");
+  std::size_t laws = 0;
+  for (std::size_t at = toml.find("law = \"simple\"  # calibrated"); at != std::string::npos;
+       at = toml.find("law = \"simple\"  # calibrated", at + 1)) {
+    ++laws;
+  }
+  EXPECT_EQ(laws, 2u) << toml;  // the head gate's and the downstream gate's
+  EXPECT_NE(read_text(scratch / "cal.json").find("\"kept\": true"), std::string::npos);
+  const RunResult again = run_canalsim("simulate cal.toml -e op1 -o again.csv", scratch);
+  EXPECT_EQ(again.code, 0) << again.err;
   fs::remove_all(scratch);
 }
 
