@@ -53,6 +53,10 @@ void add_head_gate(const Scenario& s, std::vector<Parameter>& out) {
                      "head gate discharge-coefficient multiplier in submerged flow (gates/sluice_gate.hpp)", 0.3, 3.0,
                      Transform::log, 0.01, [](const Scenario& x) { return x.head_gate->submerged_coefficient(); },
                      [](Scenario& x, double v) { x.head_gate->submerged_discharge_coefficient = v; }));
+  out.push_back(make("zero_head_mm", "mm", "head_gate.zero_head_m",
+                     "head below which the head gate's submerged law turns linear in the head (gates/sluice_gate.hpp)",
+                     0.0, 20.0, Transform::linear, 0.05, [](const Scenario& x) { return x.head_gate->zero_head_m / kMm; },
+                     [](Scenario& x, double v) { x.head_gate->zero_head_m = v * kMm; }));
   out.push_back(make("actuator_speed_mm_s", "mm/s", "head_gate.actuator_speed_m_s",
                      "head gate actuator speed (paper eq. 16); the scenario's 0 (ideal) is outside the bounds", 0.5,
                      1000.0, Transform::log, 0.02, [](const Scenario& x) { return x.head_gate->actuator_speed_m_s / kMm; },

@@ -37,6 +37,17 @@ std::string gate_law_lines(const Calibration& c) {
   return out;
 }
 
+std::string grid_lines(const Calibration& c) {
+  if (c.grids.empty()) return "";
+  std::string cells;
+  for (const auto& grid : c.grids) {
+    int total = 0;
+    for (int n : grid) total += n;
+    cells += (cells.empty() ? "" : " -> ") + std::to_string(total);
+  }
+  return "grid: " + cells + " cells (" + c.grid_note + ")\n";
+}
+
 std::string text_summary(const Calibration& c) {
   std::ostringstream out;
   if (!c.ok) {
@@ -87,6 +98,7 @@ std::string text_summary(const Calibration& c) {
       << "; residual autocorrelation inflates the variances " << format_fixed(c.inflation, 1) << "x\n";
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
   if (!c.gate_laws.empty()) out << gate_law_lines(c);
+  out << grid_lines(c);
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
   if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
@@ -140,6 +152,8 @@ nlohmann::json to_json(const Calibration& c) {
     if (!l.ok) entry["message"] = l.message;
     j["gate_laws"].push_back(entry);
   }
+  j["grids"] = c.grids;
+  j["grid_note"] = c.grid_note;
   j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;
   j["cost_after"] = c.cost_after;

@@ -15,6 +15,9 @@ std::string text_summary(const Calibration& c);
 nlohmann::json to_json(const Calibration& c);
 // The gate laws compared (CalibrateOptions::gate_laws), one line each, the kept one marked.
 std::string gate_law_lines(const Calibration& c);
+// The grids calibrated on (CalibrateOptions::grid_refinements) and why the refinement stopped;
+// empty when none was asked for.
+std::string grid_lines(const Calibration& c);
 std::string html_report(const Calibration& c, const std::string& title);
 
 }  // namespace canalsim::calibration

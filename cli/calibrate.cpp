@@ -32,6 +32,7 @@ struct CalibrateArguments {
   std::string out, json, report;
   int threads = 2;
   int starts = 2;
+  int grid_refinements = 2;
   std::string replay = "diagnosis";
 };
 
@@ -92,6 +93,11 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
     edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")",
                      "\"" + std::string(scenarios::to_string(law)) + "\""});
   }
+  for (std::size_t i = 0; c.grids.size() > 1 && i < c.calibrated.pools.size(); ++i) {
+    edits.push_back({"pools[" + std::to_string(i + 1) + "].cells", 0.0,
+                     "calibrated on this grid (was " + std::to_string(c.grids.front()[i]) + "): " + c.grid_note,
+                     std::to_string(c.calibrated.pools[i].cells)});
+  }
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
   std::map<std::string, double> deviations;  // [calibration.std]: what diagnose takes as left open
@@ -110,6 +116,9 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
     }
   }
   if (!c.gate_laws.empty() && gate_law_keys(back) != gate_law_keys(c.calibrated)) throw std::runtime_error("calibrated scenario: the gate laws do not read back");
+  for (std::size_t i = 0; i < back.pools.size() && i < c.calibrated.pools.size(); ++i) {
+    if (back.pools[i].cells != c.calibrated.pools[i].cells) throw std::runtime_error("calibrated scenario: the grid does not read back");
+  }
   return out;
 }
 
@@ -137,6 +146,7 @@ int run(const CalibrateArguments& args) {
   if (!args.channels.empty()) options.replay.channels = args.channels;
   options.threads = args.threads;
   options.starts = args.starts;
+  options.grid_refinements = args.grid_refinements;
   for (const auto& law : args.gate_laws) {
     options.gate_laws.push_back(law == "swamee" ? scenarios::GateLaw::swamee : scenarios::GateLaw::simple);
   }
@@ -195,6 +205,10 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
   cmd->add_option("--threads", args->threads, "Simulations in parallel (default 2)")->check(thread_count());
   cmd->add_option("--starts", args->starts, "Levenberg-Marquardt starts (default 2)")->check(integer_in(1, 10, "a number of starts"));
+  cmd->add_option("--grid-refinements", args->grid_refinements,
+                  "Calibrate again on twice the cells while that lowers the cost by more than a third, at most N times "
+                  "(default 2; 0: the scenario's grid; docs/calibration.md)")
+      ->check(integer_in(0, 3, "a number of refinements"));
   cmd->add_option("--replay", args->replay,
                   "diagnosis: replay the recordings as `diagnose` does (the upstream model drives the head gate; "
                   "for a scenario diagnosed next); recorded-upstream: drive the head gate with the recorded y_up_mm "

@@ -34,6 +34,18 @@ constexpr double singular_floor = 1e-9;
 // would pass ~1e-12 m²/s.
 constexpr double smallest_opening = 1e-12;  // m
 
+// The submerged law's power of the head, h^p, regularised near zero head (SluiceGateOptions::
+// zero_head): h (h + h0)^(p - 1), with its slope (h + h0)^(p - 2) (p h + h0). With h0 = 0 the
+// caller keeps its own h^p (bit for bit the published law).
+struct HeadPower {
+  double value, slope;
+};
+HeadPower regularised_head_power(double head, double h0, double p) {
+  const double base = head + h0;
+  const double scale = std::pow(base, p - 2.0);
+  return {head * base * scale, scale * (p * head + h0)};
+}
+
 bool in_half_open(double value, double low, double high) {  // (low, high]
   return std::isfinite(value) && value > low && value <= high;
 }
@@ -115,6 +127,8 @@ Status SluiceGateOptions::validate() const {
                simple_discharge_coefficient, "a value in (0, 2]")
       .require(std::isfinite(leakage_opening) && leakage_opening >= 0.0 && leakage_opening <= 1.0, "leakage_opening",
                leakage_opening, "a value in [0, 1] m")
+      .require(std::isfinite(zero_head) && zero_head >= 0.0 && zero_head <= 1.0, "zero_head", zero_head,
+               "a value in [0, 1] m")
       .require(in_half_open(gravity, 0.0, 100.0), "gravity", gravity, "a value in (0, 100] m/s^2")
       .status();
 }
@@ -243,10 +257,14 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   if (options_.law == GateLaw::simple) {  // eq. (11)
     const double coefficient = options_.submerged_multiplier() *
                                options_.simple_discharge_coefficient;
-    const double root = std::sqrt(2.0 * options_.gravity * head);
+    const double h0 = options_.zero_head;
+    const HeadPower power = h0 > 0.0 ? regularised_head_power(head, h0, 0.5) : HeadPower{0.0, 0.0};
+    const double root = h0 > 0.0 ? std::sqrt(2.0 * options_.gravity) * power.value
+                                 : std::sqrt(2.0 * options_.gravity * head);
     out.q = coefficient * a_seen * root;
-    const double dq_dhead = coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * 0.5 /
-                            std::sqrt(std::max(head, floor));
+    const double dq_dhead = h0 > 0.0 ? coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * power.slope
+                                     : coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * 0.5 /
+                                           std::sqrt(std::max(head, floor));
     out.d_y1 = dq_dhead + coefficient * root * dseen_dy1;
     out.d_y3 = -dq_dhead;
     out.d_a = coefficient * root * dseen_da;
@@ -255,15 +273,18 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
 
   // Swamee's submergence factor F = D / (0.32 S + D), D = head^0.7, S = (y_lc - y1)^0.7.
   const double margin = y_lc - y1;
-  const double D = std::pow(head, submergence_exponent);
+  const double h0 = options_.zero_head;
+  const HeadPower power = h0 > 0.0 ? regularised_head_power(head, h0, submergence_exponent) : HeadPower{0.0, 0.0};
+  const double D = h0 > 0.0 ? power.value : std::pow(head, submergence_exponent);
   const double S = std::pow(margin, submergence_exponent);
   const double den = submergence_weight * S + D;
   const double F = D / den;
   const double dF_dD = submergence_weight * S / (den * den);
   const double dF_dS = -submergence_weight * D / (den * den);
   // x^-0.3 = x^0.7 / x reuses D and S (two pow fewer); below the floor the slope is floored.
-  const double dD_dhead = submergence_exponent *
-      (head > floor ? D / head : floored_power(head, submergence_exponent - 1.0, floor));
+  const double dD_dhead = h0 > 0.0 ? power.slope
+                                   : submergence_exponent *
+                                         (head > floor ? D / head : floored_power(head, submergence_exponent - 1.0, floor));
   const double dS_dmargin = submergence_exponent *
       (margin > floor ? S / margin : floored_power(margin, submergence_exponent - 1.0, floor));
   const double dylc_dy3 = floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;

@@ -31,6 +31,8 @@
 //   Swamee's condition would call the flow free up to zero head and q would jump to reverse flow.
 //   The flow law floors its border at 1.05 y3, so the flow submerges as the head vanishes and q
 //   falls continuously to 0. classify_regime keeps the paper's published condition.
+// - Near zero head, optionally (SluiceGateOptions::zero_head, 0 by default): the submerged law's
+//   power of the head turns linear below a head h0, so its slope stays finite.
 // - Closed gate (a <= 0 and no leakage): a wall, q = 0.
 // - Leakage: the law sees the opening max(a, 0) + leakage_opening, so a "closed" gate with
 //   leakage passes the flow of a small opening.
@@ -98,6 +100,18 @@ struct SluiceGateOptions {
   double simple_discharge_coefficient = 0.6;
   // Extra opening that leaks under a closed gate [m]. Range [0, 1].
   double leakage_opening = 0.0;
+  // Regularisation of the submerged law near zero head [m], range [0, 1]; 0 = the law as published.
+  // Both submerged laws grow like a power of the head h = y1 - y3 (h^0.7 in Swamee's, h^0.5 in
+  // eq. 11), with an unbounded slope at zero head, and neither was fitted on heads of a few mm:
+  // there viscosity and the drowned jet govern, and every simulator regularises the law its own
+  // way. With zero_head = h0 > 0 the power h^p becomes
+  //   h (h + h0)^(p - 1),
+  // linear in the head below h0 (slope h0^(p-1), finite), the published power above it
+  // (relative change (1 - p) h0 / h for h >> h0). The discharge at the regime border (F = 1) and
+  // at zero head (0) is unchanged, so the law stays continuous. Calibration fits h0
+  // (calibration/parameters.cpp) to a gate that runs nearly drowned, like the lab's head gate at
+  // op3/op4 (head ~1 mm).
+  double zero_head = 0.0;
   double gravity = standard_gravity;  // m/s^2, range (0, 100]
 
   // Ok, or one line naming the field and its allowed range (core/status.hpp).

@@ -62,6 +62,7 @@ gates::GateGeometry gate_geometry(const GateSpec& g) {
   geometry.law.discharge_coefficient_multiplier = g.discharge_coefficient;
   geometry.law.submerged_discharge_coefficient_multiplier = g.submerged_coefficient();
   geometry.law.leakage_opening = g.leakage_m;
+  geometry.law.zero_head = g.zero_head_m;
   return geometry;
 }
 

@@ -67,6 +67,9 @@ struct GateSpec {
   std::optional<double> submerged_discharge_coefficient;
   double submerged_coefficient() const { return submerged_discharge_coefficient.value_or(discharge_coefficient); }
   double leakage_m = 0.0;           // extra effective opening (a gate that does not seal)
+  // Head below which the submerged law turns linear in the head (gates/sluice_gate.hpp
+  // SluiceGateOptions::zero_head); 0 = the law as published.
+  double zero_head_m = 0.0;
   double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
   bool controlled = false;          // driven by the experiment's input signal
   // opening_m = "auto": opening_m is computed (scenarios/design.hpp) so that the gate passes the

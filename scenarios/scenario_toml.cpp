@@ -46,6 +46,7 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
         t.number("submerged_discharge_coefficient", g.submerged_coefficient(), {0.0, 5.0, true}, "");
   }
   g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 1.0}, "m");
+  g.zero_head_m = t.number("zero_head_m", g.zero_head_m, {0.0, 1.0}, "m (0 = the submerged law as published)");
   g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
   g.controlled = t.boolean("controlled", g.controlled);
   t.reject_unknown_keys();

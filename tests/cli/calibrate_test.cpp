@@ -101,4 +101,31 @@ TEST(Calibrate, ComparingGateLawsWritesTheKeptLawAtEveryGate) {
   fs::remove_all(scratch);
 }
 
+// Recordings of the lab simulated on 400 cells: the lab's 100 cells limit the fit, and the
+// calibration refines the grid once; the written scenario holds the grid it was calibrated on.
+TEST(Calibrate, ARefinedGridIsWrittenIntoTheCalibratedScenario) {
+  const fs::path scratch = scratch_dir("calibrate_grid");
+  std::string fine = run_canalsim("scenarios --show lab", scratch).out;
+  ASSERT_NE(fine.find("cells = 100"), std::string::npos);
+  fine.replace(fine.find("cells = 100"), 11, "cells = 400");
+  std::ofstream(scratch / "fine.toml") << fine;
+  const RunResult sim = run_canalsim("simulate fine.toml -e op1 -o op1.csv", scratch);
+  ASSERT_EQ(sim.code, 0) << sim.err;
+  const RunResult r = run_canalsim("calibrate --scenario lab op1.csv -o cal.toml --params manning_n,offset_y_dwe_mm "
+                                   "--starts 1 --grid-refinements 1 --json cal.json",
+                                   scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("grid: 100 -> 200 cells"), std::string::npos) << r.out;
+  const std::string toml = read_text(scratch / "cal.toml");
+  EXPECT_NE(toml.find("cells = 200  # calibrated on this grid (was 100)"), std::string::npos) << toml;
+  EXPECT_NE(read_text(scratch / "cal.json").find("\"grids\""), std::string::npos);
+  const RunResult again = run_canalsim("simulate cal.toml -e op1 -o again.csv", scratch);
+  EXPECT_EQ(again.code, 0) << again.err;
+  const RunResult bad = run_canalsim("calibrate --scenario lab op1.csv -o bad.toml --grid-refinements 4", scratch);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("--grid-refinements"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(scratch / "bad.toml"));
+  fs::remove_all(scratch);
+}
+
 }  // namespace

@@ -88,6 +88,65 @@ TEST(SwameeSubmergedFlow, MatchesHandComputedFactor) {
   EXPECT_EQ(gate.evaluate(y1, y3, a).regime, GateRegime::submerged);
 }
 
+// Zero-head regularisation (SluiceGateOptions::zero_head = h0): the power h^p of the submerged
+// law becomes h (h + h0)^(p - 1), by hand here.
+SluiceGate regularised(double h0, GateLaw law = GateLaw::swamee) {
+  SluiceGateOptions options;
+  options.law = law;
+  options.zero_head = h0;
+  return SluiceGate(options);
+}
+
+TEST(ZeroHeadRegularisation, SwameesFactorTakesTheRegularisedPowerOfTheHead) {
+  const double y1 = 0.06, y3 = 0.0591, a = 0.043, h0 = 0.002;  // the lab's head gate at op3
+  const double head = y1 - y3;
+  const double y_lc = std::max(0.81 * y3 * std::pow(y3 / a, 0.72), 1.05 * y3);  // floored here
+  const double d = head * std::pow(head + h0, -0.3);
+  const double factor = d / (0.32 * std::pow(y_lc - y1, 0.7) + d);
+  EXPECT_NEAR(regularised(h0).discharge(y1, y3, a), swamee_free_discharge(y1, a) * factor, 1e-16);
+  // Less than the published law, which it approaches for heads well above h0 ((1 - p) h0 / h).
+  EXPECT_LT(regularised(h0).discharge(y1, y3, a), 0.9 * SluiceGate{}.discharge(y1, y3, a));
+  const double far = regularised(1e-5).discharge(0.06, 0.045, 0.02), published = SluiceGate{}.discharge(0.06, 0.045, 0.02);
+  EXPECT_NEAR(far / published, 1.0, 0.3 * 1e-5 / 0.015) << far / published;
+  EXPECT_LT(far, published);
+}
+
+TEST(ZeroHeadRegularisation, Equation11BecomesLinearInTheHeadBelowH0) {
+  const double y1 = 0.06, y3 = 0.0599, a = 0.02, h0 = 0.004;  // head 0.1 mm << h0
+  const double head = y1 - y3;
+  const double by_hand = 0.6 * a * std::sqrt(2.0 * 9.81) * head / std::sqrt(head + h0);
+  EXPECT_NEAR(regularised(h0, GateLaw::simple).discharge(y1, y3, a), by_hand, 1e-15);
+  // The slope at zero head is finite: 0.6 a sqrt(2 g) h0^-0.5 per metre of head.
+  const GateFlow at_zero = regularised(h0, GateLaw::simple).evaluate(y1, y1, a);
+  EXPECT_NEAR(at_zero.dq_dy1, 0.6 * a * std::sqrt(2.0 * 9.81) / std::sqrt(h0), 1e-12);
+  EXPECT_EQ(at_zero.q, 0.0);
+}
+
+TEST(ZeroHeadRegularisation, KeepsTheDischargeContinuousAtTheBorderAndThroughZeroHead) {
+  const SluiceGate gate = regularised(0.003);
+  const double y1 = 0.06, a = 0.03;
+  const double y3 = border_tailwater(y1, a);
+  // F = 1 at the border whatever the head's power: the submerged discharge meets the free one
+  // (the margin's power, (y_lc - y1)^0.7, makes the approach steep: 1e-12 m off, ~1e-7 relative).
+  const double free = gate.discharge(y1, 0.0, a);
+  EXPECT_EQ(gate.discharge(y1, y3 - 1e-12, a), free);
+  EXPECT_NEAR(gate.discharge(y1, y3 + 1e-12, a), free, 1e-6 * free);
+  EXPECT_LT(gate.discharge(y1, y3 + 1e-12, a), free);
+  // Through zero head: linear, so q(+dh) = -q(-dh) (to the rounding of y1 - y3), and both tiny.
+  const double up = gate.discharge(0.05, 0.05 - 1e-9, 0.02), down = gate.discharge(0.05, 0.05 + 1e-9, 0.02);
+  EXPECT_NEAR(up, -down, 1e-6 * std::abs(up));
+  EXPECT_GT(up, 0.0);
+  EXPECT_LT(up, 1e-6 * gate.discharge(0.05, 0.0, 0.02));
+}
+
+TEST(ZeroHeadRegularisation, OptionIsValidated) {
+  SluiceGateOptions options;
+  options.zero_head = -0.001;
+  EXPECT_NE(options.validate().message().find("zero_head"), std::string::npos);
+  options.zero_head = std::nan("");
+  EXPECT_FALSE(options.validate());
+}
+
 TEST(SimpleLaws, FreeFlowIsPaperEquation9) {
   // q = 0.6 a sqrt(2 g y1) = 0.6 * 0.025 * sqrt(2 * 9.81 * 0.06), by hand.
   EXPECT_NEAR(simple_gate().discharge(0.06, 0.0, 0.025), 0.01627482718802261, 1e-15);
@@ -367,6 +426,14 @@ TEST(Derivatives, ScaledLawWithLeakageMatchesCentralDifferences) {
   SluiceGateOptions options;
   options.discharge_coefficient_multiplier = 0.93;
   options.leakage_opening = 0.0005;
+  expect_derivatives_match_central_differences(SluiceGate(options));
+}
+
+TEST(Derivatives, RegularisedNearZeroHeadMatchCentralDifferences) {
+  SluiceGateOptions options;
+  options.zero_head = 0.002;
+  expect_derivatives_match_central_differences(SluiceGate(options));
+  options.law = GateLaw::simple;
   expect_derivatives_match_central_differences(SluiceGate(options));
 }
 
