@@ -526,7 +526,15 @@ Calibration compare_gate_laws(const Scenario& scenario, const std::vector<Record
     }
   }
   best.simulations = simulations;
-  if (best.ok) {
+  // The kept law's "before" figures are the scenario's own when every gate already had that law.
+  bool kept_is_given = best.ok;
+  for (const auto& l : laws) {
+    if (!l.kept) continue;
+    scenarios::for_each_sluice_gate(scenario, [&](const std::string&, const scenarios::GateSpec& g) {
+      kept_is_given = kept_is_given && g.law == l.law;
+    });
+  }
+  if (best.ok && !kept_is_given) {
     try {
       restate_before(best, scenario, specs, recordings, validation, o);
     } catch (const std::exception& e) {

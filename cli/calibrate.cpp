@@ -22,6 +22,7 @@
 #include "core/recording.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/scenario_toml.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::cli {
 namespace {
@@ -55,15 +56,9 @@ std::vector<Recording> read_all(const std::vector<std::string>& files) {
 // "downstream.gate.law"; scenario_file.hpp) with the law it holds.
 std::vector<std::pair<std::string, scenarios::GateLaw>> gate_law_keys(const scenarios::Scenario& s) {
   std::vector<std::pair<std::string, scenarios::GateLaw>> keys;
-  if (s.head_gate) keys.emplace_back("head_gate.law", s.head_gate->law);
-  for (std::size_t i = 0; i < s.gates.size(); ++i) keys.emplace_back("gates[" + std::to_string(i + 1) + "].law", s.gates[i].law);
-  if (s.downstream.kind == scenarios::DownstreamKind::gate) keys.emplace_back("downstream.gate.law", s.downstream.gate.law);
+  scenarios::for_each_sluice_gate(
+      s, [&keys](const std::string& table, const scenarios::GateSpec& g) { keys.emplace_back(table + ".law", g.law); });
   return keys;
-}
-
-// The laws a calibration compared, as its calibrated scenario carries them; none when it compared none.
-std::vector<std::pair<std::string, scenarios::GateLaw>> gate_law_keys(const calibration::Calibration& c) {
-  return c.gate_laws.empty() ? std::vector<std::pair<std::string, scenarios::GateLaw>>{} : gate_law_keys(c.calibrated);
 }
 
 // "swamee: cost 0.18; simple: cost 0.031"
@@ -89,9 +84,11 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
                          format_g(p.start, 6) + converged + ")",
                      ""});
   }
-  for (const auto& [key, law] : gate_law_keys(c)) {
-    edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")",
-                     "\"" + std::string(scenarios::to_string(law)) + "\""});
+  if (!c.gate_laws.empty()) {  // the laws compared, as the calibrated scenario carries them
+    for (const auto& [key, law] : gate_law_keys(c.calibrated)) {
+      edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")",
+                       "\"" + std::string(scenarios::to_string(law)) + "\""});
+    }
   }
   for (std::size_t i = 0; c.grids.size() > 1 && i < c.calibrated.pools.size(); ++i) {
     edits.push_back({"pools[" + std::to_string(i + 1) + "].cells", 0.0,

@@ -62,10 +62,8 @@ Status BaselineOptions::validate() const {
   return check.status();
 }
 
-double left_open(const calibration::ParameterEstimate& p) {
-  // Without the grid check the statistical part is the whole deviation.
-  return p.grid_shift > 0.0 || p.statistical_std > 0.0 ? p.statistical_std : p.std;
-}
+// calibrate() sets statistical_std always (without the grid check it is the whole std).
+double left_open(const calibration::ParameterEstimate& p) { return p.statistical_std; }
 
 std::map<std::string, double> calibrated_std_of(const calibration::Calibration& c) {
   std::map<std::string, double> out;

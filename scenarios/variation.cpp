@@ -16,13 +16,6 @@ void note(std::string* drawn, const std::string& line) {
   if (drawn) *drawn += (drawn->empty() ? "" : "; ") + line;
 }
 
-template <class Edit>
-void for_each_sluice_gate(Scenario& s, Edit edit) {
-  if (s.head_gate) edit(*s.head_gate);
-  for (auto& g : s.gates) edit(g);
-  if (s.downstream.kind == DownstreamKind::gate) edit(s.downstream.gate);
-}
-
 }  // namespace
 
 Scenario independent_truth(Scenario s, const TruthVariation& v) {
@@ -39,7 +32,7 @@ Scenario independent_truth(Scenario s, const TruthVariation& v) {
     // submerged multiplier is the same (eqs. 9 and 11 share Cd), so it is unset.
     const double multiplier = v.simple_discharge_coefficient / gates::SluiceGateOptions{}.simple_discharge_coefficient;
     s = with_gate_law(std::move(s), GateLaw::simple);
-    for_each_sluice_gate(s, [multiplier](GateSpec& g) {
+    for_each_sluice_gate(s, [multiplier](const std::string&, GateSpec& g) {
       g.discharge_coefficient = multiplier;
       g.submerged_discharge_coefficient.reset();
     });
@@ -48,12 +41,14 @@ Scenario independent_truth(Scenario s, const TruthVariation& v) {
 }
 
 Scenario with_gate_law(Scenario s, GateLaw law) {
-  for_each_sluice_gate(s, [law](GateSpec& g) { g.law = law; });
+  for_each_sluice_gate(s, [law](const std::string&, GateSpec& g) { g.law = law; });
   return s;
 }
 
 bool has_sluice_gate(const Scenario& s) {
-  return s.head_gate || !s.gates.empty() || s.downstream.kind == DownstreamKind::gate;
+  bool any = false;
+  for_each_sluice_gate(s, [&any](const std::string&, const GateSpec&) { any = true; });
+  return any;
 }
 
 Scenario perturb_uncertain(Scenario s, const UncertainTolerances& t, std::mt19937_64& rng, std::string* drawn) {

@@ -37,6 +37,16 @@ Scenario with_gate_law(Scenario s, GateLaw law);
 // Whether the scenario has a sluice gate a law applies to.
 bool has_sluice_gate(const Scenario& s);
 
+// Calls visit(table, gate) for every sluice gate a law applies to — the head gate, the gates
+// between pools, the downstream gate — with its scenario table ("head_gate", "gates[2]",
+// "downstream.gate"; the keys of calibration/scenario_file.hpp). S is Scenario or const Scenario.
+template <class S, class Visit>
+void for_each_sluice_gate(S& s, Visit visit) {
+  if (s.head_gate) visit(std::string("head_gate"), *s.head_gate);
+  for (std::size_t i = 0; i < s.gates.size(); ++i) visit("gates[" + std::to_string(i + 1) + "]", s.gates[i]);
+  if (s.downstream.kind == DownstreamKind::gate) visit(std::string("downstream.gate"), s.downstream.gate);
+}
+
 // Tolerances of the physics a laboratory does not know (each drawn uniformly within ±).
 struct UncertainTolerances {
   double discharge_coefficient = 0.05;  // relative, free and submerged drawn independently
