@@ -61,8 +61,10 @@ struct CalibrateOptions {
   // eqs. 9/11. Empty (the default): the scenario's own laws, one calibration.
   std::vector<scenarios::GateLaw> gate_laws;
   // Grid refinement: while the grid check finds that twice the cells lower the weighted cost by
-  // more than a third (the discretisation, not the physics, limits the fit), calibrate again on
-  // twice the cells of every pool, from the estimates, at most this many times (0..3). Each
+  // more than a third (the discretisation, not the physics, limits the fit), or the last
+  // refinement lowered the fitted cost by more than a third, calibrate again on twice the cells
+  // of every pool, from the estimates, at most this many times (0..3); a refinement that does not
+  // lower the cost is dropped. Each
   // doubling costs about 2.6 times the simulations' time (lab: 100 -> 200 cells). 0 (the
   // library's default): the scenario's grid; `canalsim calibrate` refines twice at most.
   int grid_refinements = 0;
