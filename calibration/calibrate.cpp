@@ -559,8 +559,34 @@ std::vector<int> cells_of(const Scenario& s) {
 // 100 cells leave 0.36 of the cost on 200, 200 cells 0.41 on 400, and 400 cells 1.08 on 800.
 constexpr double kRefineBelow = 2.0 / 3.0;
 
+// Why `c`, the k-th grid's calibration (k = 0: the scenario's), is not refined further; empty
+// when it is. The grid check re-simulates the optimum, whose parameters absorbed part of the
+// grid's error: after a refinement that paid, a further one is tried even when the check alone
+// would not ask for it (a refinement that does not lower the cost is dropped).
+std::string why_not_refine(const Calibration& c, int k, double coarser_cost) {
+  if (!c.ok || !c.grid.done) return "no refinement: the grid check did not run";
+  const bool check_asks = c.grid.refined_cost < kRefineBelow * c.grid.cost;
+  const bool last_paid = k > 0 && c.cost_after < kRefineBelow * coarser_cost;
+  if (check_asks || last_paid) return "";
+  return "refinement stopped: twice the cells change the cost by " +
+         format_fixed(100.0 * (c.grid.refined_cost / c.grid.cost - 1.0), 1) +
+         " % (it refines while they lower it by more than a third, or the last refinement did)";
+}
+
+// `finer`, the calibration on the refined grid, takes over what `coarser` carried: the starts of
+// the parameters, the gate laws compared, the grids so far, the iterations and warnings.
+void carry_over(Calibration& finer, Calibration&& coarser) {
+  for (std::size_t j = 0; j < finer.parameters.size(); ++j) finer.parameters[j].start = coarser.parameters[j].start;
+  finer.gate_laws = std::move(coarser.gate_laws);
+  std::vector<std::vector<int>> grids = std::move(coarser.grids);
+  grids.push_back(cells_of(finer.calibrated));
+  finer.grids = std::move(grids);
+  finer.iterations += coarser.iterations;
+  finer.warnings.insert(finer.warnings.begin(), coarser.warnings.begin(), coarser.warnings.end());
+}
+
 // CalibrateOptions::grid_refinements: `c` calibrated again on twice the cells, from its estimates,
-// while the grid check says that pays; the "before" figures restated for the scenario as given.
+// while that pays; the "before" figures restated for the scenario as given.
 Calibration refine_grid(Calibration c, const Scenario& given, const std::vector<Recording>& recordings,
                         const std::vector<Recording>& validation, const std::vector<std::string>& specs,
                         const CalibrateOptions& o) {
@@ -570,19 +596,8 @@ Calibration refine_grid(Calibration c, const Scenario& given, const std::vector<
   int simulations = c.simulations;
   double coarser_cost = 0.0;  // the fit on the grid before (k > 0)
   for (int k = 0; k < o.grid_refinements; ++k) {
-    if (!c.ok || !c.grid.done) {
-      c.grid_note = "no refinement: the grid check did not run";
-      break;
-    }
-    // The grid check re-simulates the optimum, whose parameters absorbed part of the grid's error:
-    // after a refinement that paid, a further one is tried even when the check alone would not
-    // ask for it (a refinement that does not lower the cost is dropped below).
-    const bool check_asks = c.grid.refined_cost < kRefineBelow * c.grid.cost;
-    const bool last_paid = k > 0 && c.cost_after < kRefineBelow * coarser_cost;
-    if (!check_asks && !last_paid) {
-      c.grid_note = "refinement stopped: twice the cells change the cost by " +
-                    format_fixed(100.0 * (c.grid.refined_cost / c.grid.cost - 1.0), 1) +
-                    " % (it refines while they lower it by more than a third, or the last refinement did)";
+    if (std::string why = why_not_refine(c, k, coarser_cost); !why.empty()) {
+      c.grid_note = std::move(why);
       break;
     }
     coarser_cost = c.cost_after;
@@ -602,12 +617,7 @@ Calibration refine_grid(Calibration c, const Scenario& given, const std::vector<
                     (next.ok ? "the cost did not fall (" + format_g(next.cost_after, 3) + ")" : next.message);
       break;
     }
-    for (std::size_t j = 0; j < next.parameters.size(); ++j) next.parameters[j].start = c.parameters[j].start;
-    next.gate_laws = std::move(c.gate_laws);
-    next.grids = std::move(c.grids);
-    next.grids.push_back(cells_of(finer));
-    next.iterations += c.iterations;
-    next.warnings.insert(next.warnings.begin(), c.warnings.begin(), c.warnings.end());
+    carry_over(next, std::move(c));
     c = std::move(next);
     c.grid_note = "refined " + std::to_string(k + 1) + " time(s): the grid limited the fit";
     if (k + 1 == o.grid_refinements) {
