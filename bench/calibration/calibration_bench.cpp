@@ -41,14 +41,11 @@ std::vector<Recording> truth_recordings(int cells = 150, double cfl = 0.5) {
   return out;
 }
 
-void BM_CalibrateDefaultSetOnFourLabRecordings(benchmark::State& state) {
+// The timed loop: calibrate the lab on `recordings` with `options`; the counters every benchmark
+// here reports. Returns the last calibration.
+calibration::Calibration time_calibration(benchmark::State& state, const std::vector<Recording>& recordings,
+                                          const calibration::CalibrateOptions& options) {
   const auto lab = scenarios::builtin_scenario("lab");
-  const auto recordings = truth_recordings();
-  calibration::CalibrateOptions options;
-  options.threads = 2;
-  options.starts = static_cast<int>(state.range(0));
-  options.further_starts_only_when_doubtful = state.range(1) == 0;
-  options.grid_refinements = static_cast<int>(state.range(2));
   calibration::Calibration c;
   double cpu_s = 0.0;
   for (auto _ : state) {
@@ -59,10 +56,20 @@ void BM_CalibrateDefaultSetOnFourLabRecordings(benchmark::State& state) {
   }
   state.counters["process_cpu_s"] = cpu_s / static_cast<double>(state.iterations());
   state.counters["simulations"] = c.simulations;
-  state.counters["iterations"] = c.iterations;
-  state.counters["starts_run"] = c.starts;
   state.counters["cost_ratio"] = c.cost_before > 0.0 ? c.cost_after / c.cost_before : 0.0;
   state.counters["cells"] = c.calibrated.pools.front().cells;
+  return c;
+}
+
+void BM_CalibrateDefaultSetOnFourLabRecordings(benchmark::State& state) {
+  calibration::CalibrateOptions options;
+  options.threads = 2;
+  options.starts = static_cast<int>(state.range(0));
+  options.further_starts_only_when_doubtful = state.range(1) == 0;
+  options.grid_refinements = static_cast<int>(state.range(2));
+  const calibration::Calibration c = time_calibration(state, truth_recordings(), options);
+  state.counters["iterations"] = c.iterations;
+  state.counters["starts_run"] = c.starts;
   state.SetLabel(c.ok ? c.starts_note : c.message);
 }
 
@@ -84,23 +91,10 @@ BENCHMARK(BM_CalibrateDefaultSetOnFourLabRecordings)
 // calibration runs again on 200 and 400 cells. Argument: refinements at most (0: the 100-cell
 // calibration alone, for the ratio).
 void BM_CalibrateWithGridRefinementOnAFineGridTruth(benchmark::State& state) {
-  const auto lab = scenarios::builtin_scenario("lab");
-  const auto recordings = truth_recordings(800, 0.45);
   calibration::CalibrateOptions options;
   options.threads = 2;
   options.grid_refinements = static_cast<int>(state.range(0));
-  calibration::Calibration c;
-  double cpu_s = 0.0;
-  for (auto _ : state) {
-    const std::clock_t before = std::clock();
-    c = calibration::calibrate(lab, recordings, {}, options);
-    cpu_s += static_cast<double>(std::clock() - before) / CLOCKS_PER_SEC;
-    benchmark::DoNotOptimize(c.parameters.data());
-  }
-  state.counters["process_cpu_s"] = cpu_s / static_cast<double>(state.iterations());
-  state.counters["simulations"] = c.simulations;
-  state.counters["cost_ratio"] = c.cost_before > 0.0 ? c.cost_after / c.cost_before : 0.0;
-  state.counters["cells"] = c.calibrated.pools.front().cells;
+  const calibration::Calibration c = time_calibration(state, truth_recordings(800, 0.45), options);
   state.SetLabel(c.ok ? c.grid_note : c.message);
 }
 
