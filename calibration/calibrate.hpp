@@ -150,8 +150,11 @@ struct Calibration {
   double cost_before = 0.0, cost_after = 0.0;   // weighted cost per sample (fitted recordings)
   double inflation = 1.0;    // N / N_eff of the residuals at the optimum
   std::size_t samples = 0;   // residuals in the fit
-  int simulations = 0, iterations = 0, starts = 0;
-  std::string starts_note;   // why further starts ran, or why not
+  int simulations = 0, iterations = 0;   // over every grid (grid_refinements)
+  // Starts run on the scenario's grid (a refined grid continues from the estimates), and why
+  // further starts ran there, or why not.
+  int starts = 0;
+  std::string starts_note;
   double seconds = 0.0;
   std::string solver_report; // Ceres' one-line summary of the best run
   // The simulations' warnings, the first per recording (a failed steady state: the replay then

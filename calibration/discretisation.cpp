@@ -4,8 +4,11 @@
 #include <cmath>
 #include <functional>
 #include <numeric>
+#include <string>
+#include <utility>
 
 #include "calibration/statistics.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::calibration {
 namespace {
@@ -22,13 +25,7 @@ struct Alternative {
 
 const std::vector<Alternative>& alternatives() {
   static const std::vector<Alternative> list = {
-      {kTwiceTheCells, richardson_factor(kGridOrder), [](Scenario& s) {
-         for (auto& pool : s.pools) {
-           pool.cells *= 2;
-           pool.design_depth_m.clear();  // per-cell profiles belong to the old grid
-           pool.design_discharge_m3s.clear();
-         }
-       }},
+      {kTwiceTheCells, richardson_factor(kGridOrder), [](Scenario& s) { s = scenarios::with_cells_multiplied(std::move(s), 2); }},
       {"the other limiter", 1.0, [](Scenario& s) { s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter; }},
       {"half the Courant number", 1.0, [](Scenario& s) { s.numerics.cfl *= 0.5; }},
   };
@@ -57,7 +54,7 @@ std::vector<double> parameter_move(const std::vector<Parameter>& parameters, con
 
 // Gauss–Newton with the Jacobian of the optimum held fixed: z_{k+1} = z_k + argmin |r_alt(z_k) + J δ|.
 DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double>& z, const std::vector<double>& J,
-                                const Alternative& a, int iterations) {
+                                const Alternative& a, int iterations, const std::vector<Channels>* first_prediction) {
   const auto& parameters = problem.parameters();
   DiscretisationShift out;
   out.name = a.name;
@@ -66,7 +63,7 @@ DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double
   for (int k = 0; k < iterations; ++k) {
     Scenario s = problem.scenario_at(zk);
     a.edit(s);
-    const std::vector<Channels> prediction = problem.predict(s);
+    const std::vector<Channels> prediction = k == 0 && first_prediction ? *first_prediction : problem.predict(s);
     const std::vector<double> r = problem.residuals(prediction);
     if (k == 0) {
       out.at_optimum = prediction;
@@ -84,10 +81,18 @@ DiscretisationShift re_estimate(ReplayProblem& problem, const std::vector<double
 }  // namespace
 
 std::vector<DiscretisationShift> discretisation_shifts(ReplayProblem& problem, const std::vector<double>& z,
-                                                       const std::vector<double>& jacobian, int iterations) {
+                                                       const std::vector<double>& jacobian, int iterations,
+                                                       const std::vector<Channels>* twice_the_cells_at_z) {
   std::vector<DiscretisationShift> out;
-  for (const Alternative& a : alternatives()) out.push_back(re_estimate(problem, z, jacobian, a, iterations));
+  for (const Alternative& a : alternatives()) {
+    const bool cells = std::string(a.name) == kTwiceTheCells;
+    out.push_back(re_estimate(problem, z, jacobian, a, iterations, cells ? twice_the_cells_at_z : nullptr));
+  }
   return out;
+}
+
+Scenario twice_the_cells(const ReplayProblem& problem, const std::vector<double>& z) {
+  return scenarios::with_cells_multiplied(problem.scenario_at(z), 2);
 }
 
 std::vector<double> numerical_uncertainty(const std::vector<DiscretisationShift>& shifts, std::size_t parameters) {

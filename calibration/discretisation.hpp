@@ -65,8 +65,13 @@ struct DiscretisationShift {
 
 // `z`: the optimum (search coordinates), `jacobian`: row-major N × p at z. `iterations` >= 1:
 // Gauss–Newton iterations per alternative, each one simulation per recording.
+// `twice_the_cells_at_z`: the prediction on twice the cells at z when the caller already has it.
 std::vector<DiscretisationShift> discretisation_shifts(ReplayProblem& problem, const std::vector<double>& z,
-                                                       const std::vector<double>& jacobian, int iterations = 2);
+                                                       const std::vector<double>& jacobian, int iterations = 2,
+                                                       const std::vector<Channels>* twice_the_cells_at_z = nullptr);
+
+// The scenario of `problem` at z on twice the cells (the first alternative above).
+scenarios::Scenario twice_the_cells(const ReplayProblem& problem, const std::vector<double>& z);
 
 // The numerical uncertainty of every parameter: sqrt(Σ_a (weight_a shift_a)²).
 std::vector<double> numerical_uncertainty(const std::vector<DiscretisationShift>& shifts, std::size_t parameters);

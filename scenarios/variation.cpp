@@ -18,12 +18,17 @@ void note(std::string* drawn, const std::string& line) {
 
 }  // namespace
 
-Scenario independent_truth(Scenario s, const TruthVariation& v) {
+Scenario with_cells_multiplied(Scenario s, int factor) {
   for (auto& pool : s.pools) {
-    pool.cells *= v.cells_factor;
+    pool.cells *= factor;
     pool.design_depth_m.clear();  // per-cell design profiles belong to the old grid
     pool.design_discharge_m3s.clear();
   }
+  return s;
+}
+
+Scenario independent_truth(Scenario s, const TruthVariation& v) {
+  s = with_cells_multiplied(std::move(s), v.cells_factor);
   if (v.swap_limiter) s.numerics.van_leer_limiter = !s.numerics.van_leer_limiter;
   s.numerics.cfl = v.cfl;
   if (v.simple_gate_laws) {

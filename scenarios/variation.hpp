@@ -31,6 +31,10 @@ struct TruthVariation {
 
 Scenario independent_truth(Scenario s, const TruthVariation& v = {});
 
+// The scenario on `factor` times the cells of every pool (its per-cell design profiles, which
+// belong to the old grid, dropped). Truths, the calibration's grid check and its refinement use it.
+Scenario with_cells_multiplied(Scenario s, int factor);
+
 // The scenario with `law` at every sluice gate (head, between pools, downstream), coefficients
 // unchanged (they multiply the law's published one). Calibration compares laws with it.
 Scenario with_gate_law(Scenario s, GateLaw law);

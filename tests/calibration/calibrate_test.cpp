@@ -205,6 +205,16 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
     EXPECT_LT(f.rms_after, 0.75 * g.rms_after) << f.channel << ": " << g.rms_after << " mm on 100 cells";
   }
   EXPECT_EQ(validated, 2);
+  // The 100-cell fit costs more than the doubt threshold (0.05). Kept on 100 cells, it runs a
+  // further start; refined, it does not: twice the cells bring the cost below the threshold, so
+  // the cost is the grid's, not a wrong basin's.
+  EXPECT_GT(coarse.cost_after, 0.05);
+  EXPECT_EQ(coarse.starts, 2) << coarse.starts_note;
+  EXPECT_EQ(refined.starts, 1) << refined.starts_note;
+  EXPECT_NE(refined.starts_note.find("the grid's"), std::string::npos) << refined.starts_note;
+  // The numerical uncertainty is the last grid's (the first grid left it to the refinement).
+  ASSERT_EQ(refined.discretisation.size(), 3u);
+  for (const auto& p : refined.parameters) EXPECT_GT(p.grid_shift, 0.0) << p.name;
 }
 
 // On recordings the model's own grid made, twice the cells do not lower the cost: no refinement.
