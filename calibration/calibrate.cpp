@@ -177,6 +177,12 @@ bool refinement_pays(const GridCheck& grid, double cost, int k, double coarser_c
 // leaves its numerical uncertainty and validation to the refined one.
 using RefinementFollows = std::function<bool(const GridCheck& grid, double cost_after)>;
 
+// What one grid's calibration hands to the refined one: the simulations of its optimum on twice
+// the cells (before the sensors), which its grid check made and where the refined one starts.
+struct Handover {
+  std::vector<Channels> twice_the_cells;
+};
+
 // Whether the first run's large cost is the grid's: twice the cells bring it below kDoubtfulCost,
 // and by enough that the grid will be refined. Another start on this grid would then search for
 // a basin the refined grid explains: on four lab recordings of an 800-cell truth the 100-cell fit
@@ -421,7 +427,8 @@ ReplayOptions replay_for(const std::vector<Parameter>& parameters, const Calibra
 // One calibration of the scenario's parameters named by `specs` (the recordings checked).
 Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording>& recordings,
                            const std::vector<Recording>& validation, const std::vector<std::string>& specs,
-                           const CalibrateOptions& o, const RefinementFollows& follows = {}) {
+                           const CalibrateOptions& o, const RefinementFollows& follows = {},
+                           const Handover* from_coarser = nullptr, Handover* to_finer = nullptr) {
   std::vector<Parameter> parameters = select_parameters(scenario, specs);
   const auto started = std::chrono::steady_clock::now();
   Calibration c;
@@ -430,6 +437,7 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
   WarningOncePerRecording warn_once(o.replay.warning);
   replay.warning = [&warn_once](const std::string& message) { warn_once(message); };
   ReplayProblem fit(scenario, parameters, recordings, replay, o.threads);
+  if (from_coarser) fit.prime_start(from_coarser->twice_the_cells);
   c.samples = fit.residual_count();
   if (o.progress) o.progress({0.0, "nominal replay of " + std::to_string(recordings.size()) + " recording(s)"});
   try {
@@ -489,9 +497,12 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     bool refined_next = false;  // a calibration on twice the cells follows and replaces this one
     if (o.grid_check) {
       if (o.progress) o.progress({0.91, "grid check: the optimum on twice the cells"});
-      const std::vector<Channels> fine = fit.predict(twice_the_cells(fit, best.z));
+      const Scenario finer = twice_the_cells(fit, best.z);
+      std::vector<Channels> fine_truth = fit.simulate_all(finer);
+      const std::vector<Channels> fine = fit.observe_all(fine_truth, finer);
       c.grid = grid_check(fit, fine, optimum, c.cost_after);
       refined_next = follows && follows(c.grid, c.cost_after);
+      if (refined_next && to_finer) to_finer->twice_the_cells = std::move(fine_truth);
       if (!refined_next) {
         if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
         c.discretisation = discretisation_shifts(fit, best.z, J, 2, &fine);
@@ -659,14 +670,15 @@ void carry_over(Calibration& later, Calibration&& earlier) {
 // with every statistic unless `follows` says a refinement will follow.
 Calibration calibrate_again(const Calibration& c, bool twice_the_cells, const std::vector<Recording>& recordings,
                             const std::vector<Recording>& validation, const std::vector<std::string>& specs,
-                            const CalibrateOptions& o, const std::string& stage, const RefinementFollows& follows) {
+                            const CalibrateOptions& o, const std::string& stage, const RefinementFollows& follows,
+                            const Handover* from_coarser = nullptr, Handover* to_finer = nullptr) {
   const Scenario scenario = twice_the_cells ? scenarios::with_cells_multiplied(c.calibrated, 2) : c.calibrated;
   CalibrateOptions one = o;
   one.starts = 1;  // from the estimates, which the coarser grid placed
   if (o.progress) {
     one.progress = [&o, stage](const ProgressReport& p) { o.progress({std::max(p.fraction, 0.0), stage + ": " + p.message}); };
   }
-  return calibrate_with(scenario, recordings, validation, specs, one, follows);
+  return calibrate_with(scenario, recordings, validation, specs, one, follows, from_coarser, to_finer);
 }
 
 // CalibrateOptions::grid_refinements: `c` calibrated again on twice the cells, from its estimates,
@@ -674,7 +686,7 @@ Calibration calibrate_again(const Calibration& c, bool twice_the_cells, const st
 // but the last were calibrated knowing a refinement would follow (follows_round), so their
 // numerical uncertainty and validation were left to it: a round whose refinement is dropped is
 // completed on its own grid.
-Calibration refine_grid(Calibration c, const Scenario& given, const std::vector<Recording>& recordings,
+Calibration refine_grid(Calibration c, Handover handover, const Scenario& given, const std::vector<Recording>& recordings,
                         const std::vector<Recording>& validation, const std::vector<std::string>& specs,
                         const CalibrateOptions& o) {
   const auto started = std::chrono::steady_clock::now();
@@ -689,8 +701,10 @@ Calibration refine_grid(Calibration c, const Scenario& given, const std::vector<
       break;
     }
     const int cells = 2 * c.calibrated.pools.front().cells;
+    Handover to_finer;
     Calibration next = calibrate_again(c, true, recordings, validation, specs, o, "grid refinement " + std::to_string(k + 1),
-                                       follows_round(k + 1, c.cost_after, o));
+                                       follows_round(k + 1, c.cost_after, o), &handover, &to_finer);
+    handover = std::move(to_finer);
     calibrated_again = true;
     simulations += next.simulations;
     if (!next.ok || !(next.cost_after < c.cost_after)) {
@@ -748,10 +762,11 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
       o.parameters.empty() ? default_parameters(scenario, recordings, replayed) : o.parameters;
   select_parameters(scenario, specs);  // bad specs: one line before any work
   const RefinementFollows follows = follows_round(0, 0.0, o);
-  Calibration c = o.gate_laws.empty() ? calibrate_with(scenario, recordings, validation, specs, o, follows)
+  Handover handover;  // with gate laws compared, the refined grid simulates its start itself
+  Calibration c = o.gate_laws.empty() ? calibrate_with(scenario, recordings, validation, specs, o, follows, nullptr, &handover)
                                       : compare_gate_laws(scenario, recordings, validation, specs, o, follows);
   if (o.grid_refinements == 0) return c;
-  return refine_grid(std::move(c), scenario, recordings, validation, specs, o);
+  return refine_grid(std::move(c), std::move(handover), scenario, recordings, validation, specs, o);
 }
 
 }  // namespace canalsim::calibration

@@ -71,27 +71,34 @@ std::vector<Channels> ReplayProblem::truth_at(const std::vector<double>& z) {
     const std::lock_guard lock(cache_mutex_);
     if (same_hydraulics(z, cached_z_)) return cached_truth_;
   }
-  const Scenario s = scenario_at(z);
-  std::vector<Channels> truth(replays_.size());
-  parallel_for(replays_.size(), threads_, [&](std::size_t i) { truth[i] = simulate(s, i); });
+  const std::vector<Channels> truth = simulate_all(scenario_at(z));
   const std::lock_guard lock(cache_mutex_);
   cached_z_ = z;
   cached_truth_ = truth;
   return truth;
 }
 
-std::vector<Channels> ReplayProblem::predict(const std::vector<double>& z) {
-  const std::vector<Channels> truth = truth_at(z);
-  const Scenario s = scenario_at(z);
+std::vector<Channels> ReplayProblem::predict(const std::vector<double>& z) { return observe_all(truth_at(z), scenario_at(z)); }
+
+std::vector<Channels> ReplayProblem::predict(const Scenario& s) { return observe_all(simulate_all(s), s); }
+
+std::vector<Channels> ReplayProblem::simulate_all(const Scenario& s) {
+  std::vector<Channels> truth(replays_.size());
+  parallel_for(replays_.size(), threads_, [&](std::size_t i) { truth[i] = simulate(s, i); });
+  return truth;
+}
+
+std::vector<Channels> ReplayProblem::observe_all(const std::vector<Channels>& truth, const Scenario& s) const {
   std::vector<Channels> out;
   for (const auto& t : truth) out.push_back(observed(t, s));
   return out;
 }
 
-std::vector<Channels> ReplayProblem::predict(const Scenario& s) {
-  std::vector<Channels> out(replays_.size());
-  parallel_for(replays_.size(), threads_, [&](std::size_t i) { out[i] = observed(simulate(s, i), s); });
-  return out;
+void ReplayProblem::prime_start(std::vector<Channels> truth) {
+  if (truth.size() != replays_.size()) return;
+  const std::lock_guard lock(cache_mutex_);
+  cached_z_ = start();
+  cached_truth_ = std::move(truth);
 }
 
 void ReplayProblem::residuals_of(std::size_t i, const Channels& prediction, double* out) const {

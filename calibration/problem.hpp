@@ -36,6 +36,13 @@ class ReplayProblem {
   std::vector<Channels> predict(const std::vector<double>& z);
   // The same for an edited scenario (the grid check): always simulated.
   std::vector<Channels> predict(const scenarios::Scenario& scenario);
+  // Its simulations before the sensors (always simulated), and what its sensors read from them.
+  std::vector<Channels> simulate_all(const scenarios::Scenario& scenario);
+  std::vector<Channels> observe_all(const std::vector<Channels>& truth, const scenarios::Scenario& scenario) const;
+  // Hands the problem simulate_all() of its own scenario, made by another problem on the same
+  // recordings: predict(start()) then reuses them (a refined calibration starts where the coarser
+  // one's grid check simulated).
+  void prime_start(std::vector<Channels> truth);
   // sqrt(w_c) (recorded − predicted) over the fitted samples of every recording and channel.
   std::vector<double> residuals(const std::vector<Channels>& prediction) const;
   // Row-major residual_count() × parameters Jacobian of residuals() at z (r0 = residuals at z).

@@ -6,6 +6,9 @@
 
 #include <cmath>
 
+#include "calibration/problem.hpp"
+#include "scenarios/variation.hpp"
+
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
 
@@ -81,6 +84,36 @@ TEST(Replay, InitialLevelMetadataOverridesTheFirstSamples) {
   Recording rec = record(short_lab(), "op3", 20.0);
   rec.set_meta("initial_y_up_mm", "61.5");
   EXPECT_DOUBLE_EQ(prepare_replay(rec, short_lab(), ReplayOptions{}).initial_upstream_mm, 61.5);
+}
+
+// A refined calibration starts where the coarser one's grid check simulated (calibrate.cpp,
+// Handover): the simulations one problem made of another's scenario, handed over, give the same
+// prediction at its start as its own simulations would, without simulating again.
+TEST(ReplayProblem, SimulationsHandedOverAreReusedAtTheStart) {
+  const Scenario coarse = short_lab();
+  const std::vector<Recording> recordings{record(coarse, "op2", 30.0)};
+  const std::vector<std::string> specs{"cd_free", "offset_y_dw_mm"};
+  ReplayProblem on_coarse(coarse, select_parameters(coarse, specs), recordings, ReplayOptions{}, 1);
+  const Scenario fine = scenarios::with_cells_multiplied(coarse, 2);
+  std::vector<Channels> handed = on_coarse.simulate_all(fine);
+  EXPECT_EQ(on_coarse.simulations(), 1);
+
+  ReplayProblem primed(fine, select_parameters(fine, specs), recordings, ReplayOptions{}, 1);
+  ReplayProblem fresh(fine, select_parameters(fine, specs), recordings, ReplayOptions{}, 1);
+  primed.prime_start(std::move(handed));
+  const std::vector<Channels> reused = primed.predict(primed.start());
+  const std::vector<Channels> simulated = fresh.predict(fresh.start());
+  EXPECT_EQ(primed.simulations(), 0);
+  EXPECT_EQ(fresh.simulations(), 1);
+  for (const auto& [channel, y] : simulated.front()) {
+    ASSERT_TRUE(reused.front().count(channel)) << channel;
+    EXPECT_LT(rms_difference(reused.front().at(channel), y), 1e-9) << channel;
+  }
+  // Away from the start, the primed problem simulates.
+  std::vector<double> z = primed.start();
+  z[0] += 0.01;
+  primed.predict(z);
+  EXPECT_EQ(primed.simulations(), 1);
 }
 
 }  // namespace
