@@ -1,7 +1,5 @@
 #include "calibration/calibrate.hpp"
 
-#include <ceres/ceres.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "calibration/levenberg_marquardt.hpp"
 #include "calibration/problem.hpp"
 #include "calibration/statistics.hpp"
 #include "core/errors.hpp"
@@ -26,128 +25,6 @@ using scenarios::Scenario;
 
 double cost_per_sample(const std::vector<double>& r) {
   return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
-}
-
-// The least-squares problem as Ceres sees it: one residual block of all residuals on one
-// parameter block (the search coordinates). Jacobians by ReplayProblem's parallel forward
-// differences. A simulation that fails makes the point unusable (Ceres then shrinks its step).
-class ReplayCost : public ceres::CostFunction {
- public:
-  explicit ReplayCost(ReplayProblem& problem) : problem_(problem) {
-    set_num_residuals(static_cast<int>(problem.residual_count()));
-    mutable_parameter_block_sizes()->push_back(static_cast<int>(problem.parameters().size()));
-  }
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const std::size_t p = problem_.parameters().size();
-    const std::vector<double> z(parameters[0], parameters[0] + p);
-    try {
-      const std::vector<double> r = problem_.residuals(problem_.predict(z));
-      std::copy(r.begin(), r.end(), residuals);
-      if (jacobians && jacobians[0]) {
-        const std::vector<double> J = problem_.jacobian(z, r);
-        std::copy(J.begin(), J.end(), jacobians[0]);
-      }
-    } catch (const std::exception&) {
-      return false;
-    }
-    return true;
-  }
-
- private:
-  ReplayProblem& problem_;
-};
-
-class IterationProgress : public ceres::IterationCallback {
- public:
-  IterationProgress(const ProgressCallback& progress, int run, int runs, int max_iterations)
-      : progress_(progress), run_(run), runs_(runs), max_(max_iterations) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (progress_) {
-      const double within = std::min(1.0, static_cast<double>(s.iteration + 1) / max_);
-      progress_({0.1 + 0.8 * (run_ + within) / runs_, "start " + std::to_string(run_ + 1) + "/" + std::to_string(runs_) +
-                                                          ", iteration " + std::to_string(s.iteration) + ", cost " +
-                                                          format_g(s.cost, 4)});
-    }
-    return ceres::SOLVER_CONTINUE;
-  }
-
- private:
-  const ProgressCallback& progress_;
-  int run_, runs_, max_;
-};
-
-// A run stops when a step fails although the quadratic model promised less than this fraction of
-// the cost: the model is then wrong at the scale of the improvement still on offer (the
-// forward-difference Jacobian's error and the simulation's own roughness exceed it), and Ceres
-// would halve its trust region, one evaluation of every recording each, until the step changed —
-// the radius is 1e4–1e7 there, far above the step, and the same step failed up to six times.
-// Measured on four lab recordings of an 800-cell truth, calibrated on 100, 200 and 400 cells
-// (bench/README.md, "Grid refinement"): the last failed steps promised 4.5e-4 to 7e-4 of the cost;
-// stopping there took 688 simulations instead of 900 for a final cost 0.06 % higher. A thousandth
-// of the cost is 1.6–4.5 times what one standard deviation of the estimates changes it by at
-// those optima (inflation / samples = 2.2e-4 to 6.1e-4).
-constexpr double kModelResolution = 1e-3;
-
-class StopAtTheModelsResolution : public ceres::IterationCallback {
- public:
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (s.step_is_successful || s.relative_decrease == 0.0) return ceres::SOLVER_CONTINUE;
-    const double promised = s.cost_change / s.relative_decrease;  // the model's decrease
-    return promised < kModelResolution * s.cost ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
-  }
-};
-
-struct Run {
-  std::vector<double> z;
-  double cost = std::numeric_limits<double>::infinity();
-  int iterations = 0;
-  std::string report;
-  bool converged = false;    // Ceres' termination: CONVERGENCE
-};
-
-// Relative cost decrease below which a run stops: a precise one for the run that gives the
-// answer, a loose one for a further start, which only has to show whether it leads to a better
-// basin (and is then continued precisely).
-constexpr double kPreciseTolerance = 1e-6, kScoutTolerance = 1e-3;
-
-Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, const CalibrateOptions& o, int run, int runs,
-                        double function_tolerance) {
-  ReplayCost cost(problem);
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem lsq(po);
-  lsq.AddResidualBlock(&cost, nullptr, z.data());
-  const auto& params = problem.parameters();
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    lsq.SetParameterLowerBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].low));
-    lsq.SetParameterUpperBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].high));
-  }
-  ceres::Solver::Options so;
-  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = o.max_iterations;
-  so.num_threads = 1;  // the parallelism is in the simulations
-  so.logging_type = ceres::SILENT;
-  so.function_tolerance = function_tolerance;
-  so.parameter_tolerance = 1e-5;
-  so.gradient_tolerance = 1e-10;
-  // No projected line search on the bounds: Ceres would evaluate the Jacobian (a simulation per
-  // hydraulic parameter and recording) at every line-search point as well, which more than
-  // doubled the simulations; the bounds still hold, the step being projected onto them.
-  so.max_num_line_search_step_size_iterations = 0;
-  IterationProgress progress(o.progress, run, runs, o.max_iterations);
-  so.callbacks.push_back(&progress);
-  StopAtTheModelsResolution resolution;
-  so.callbacks.push_back(&resolution);
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &lsq, &summary);
-  Run out;
-  out.z = z;
-  out.iterations = static_cast<int>(summary.iterations.size());
-  out.report = summary.BriefReport();
-  out.converged = summary.termination_type == ceres::CONVERGENCE || summary.termination_type == ceres::USER_SUCCESS;
-  if (summary.IsSolutionUsable()) out.cost = 2.0 * summary.final_cost / static_cast<double>(problem.residual_count());
-  return out;
 }
 
 // A weighted cost per sample above this leaves more than a fifth of the channels' spread
@@ -191,8 +68,7 @@ struct Handover {
 // cells; a failing one leaves the doubt.
 bool cost_is_the_grids(ReplayProblem& problem, const Run& run) {
   try {
-    const Scenario finer = scenarios::with_cells_multiplied(problem.scenario_at(run.z), 2);
-    const double refined = cost_per_sample(problem.residuals(problem.predict(finer)));
+    const double refined = cost_per_sample(problem.residuals(problem.predict(twice_the_cells(problem, run.z))));
     return refined < kDoubtfulCost && refined < kRefineBelow * run.cost;
   } catch (const std::exception&) {
     return false;
@@ -450,7 +326,7 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     // precisely only when it ends below the best so far (it mostly finds the same optimum, and
     // its tail iterations cost a simulation per hydraulic parameter and recording each).
     const int runs = o.starts;
-    Run best = levenberg_marquardt(fit, z0, o, 0, runs, kPreciseTolerance);
+    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, kPreciseTolerance);
     c.iterations += best.iterations;
     std::vector<Run> starts{Run{z0, c.cost_before, 0, "", false}};
     if (o.starts > 1) {
@@ -469,10 +345,10 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     }
     for (std::size_t k = 1; k < starts.size(); ++k) {
       const int run = static_cast<int>(k);
-      Run r = levenberg_marquardt(fit, starts[k].z, o, run, runs, kScoutTolerance);
+      Run r = levenberg_marquardt(fit, starts[k].z, o.max_iterations, o.progress, run, runs, kScoutTolerance);
       c.iterations += r.iterations;
       if (r.cost < best.cost) {
-        r = levenberg_marquardt(fit, r.z, o, run, runs, kPreciseTolerance);
+        r = levenberg_marquardt(fit, r.z, o.max_iterations, o.progress, run, runs, kPreciseTolerance);
         c.iterations += r.iterations;
       }
       if (r.cost < best.cost) best = std::move(r);
@@ -668,11 +544,11 @@ void carry_over(Calibration& later, Calibration&& earlier) {
 
 // One more calibration on the grid of `c` (from its estimates, one start) or on twice its cells,
 // with every statistic unless `follows` says a refinement will follow.
-Calibration calibrate_again(const Calibration& c, bool twice_the_cells, const std::vector<Recording>& recordings,
+Calibration calibrate_again(const Calibration& c, bool on_twice_the_cells, const std::vector<Recording>& recordings,
                             const std::vector<Recording>& validation, const std::vector<std::string>& specs,
                             const CalibrateOptions& o, const std::string& stage, const RefinementFollows& follows,
                             const Handover* from_coarser = nullptr, Handover* to_finer = nullptr) {
-  const Scenario scenario = twice_the_cells ? scenarios::with_cells_multiplied(c.calibrated, 2) : c.calibrated;
+  const Scenario scenario = on_twice_the_cells ? scenarios::with_cells_multiplied(c.calibrated, 2) : c.calibrated;
   CalibrateOptions one = o;
   one.starts = 1;  // from the estimates, which the coarser grid placed
   if (o.progress) {

@@ -1,0 +1,35 @@
+// One bounded Levenberg–Marquardt run of a calibration (Ceres Solver 2.1) on a ReplayProblem:
+// Jacobians by the problem's parallel forward differences, progress per iteration, and a stop at
+// the model's resolution (levenberg_marquardt.cpp). calibrate.cpp decides where runs start and
+// which one is kept.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "calibration/problem.hpp"
+#include "core/progress.hpp"
+
+namespace canalsim::calibration {
+
+struct Run {
+  std::vector<double> z;
+  double cost = std::numeric_limits<double>::infinity();
+  int iterations = 0;
+  std::string report;
+  bool converged = false;    // Ceres converged, or stopped at the model's resolution
+};
+
+// Relative cost decrease below which a run stops: a precise one for the run that gives the
+// answer, a loose one for a further start, which only has to show whether it leads to a better
+// basin (and is then continued precisely).
+constexpr double kPreciseTolerance = 1e-6, kScoutTolerance = 1e-3;
+
+// From z (search coordinates) within the parameters' bounds, at most `max_iterations`; the cost
+// is the weighted cost per sample, infinite when no usable solution was found. `run` of `runs`
+// for the progress messages.
+Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_iterations, const ProgressCallback& progress,
+                        int run, int runs, double function_tolerance);
+
+}  // namespace canalsim::calibration
