@@ -267,6 +267,55 @@ TEST(Calibrate, ComparingGateLawsKeepsSwameesOnACanalThatFollowsIt) {
   }
 }
 
+// The converse, on a truth that follows the paper's simple laws (eq. 11 submerged, eq. 9 free,
+// Cd 0.6, at both gates; twice the cells, minmod) with the six parameters of the first test
+// perturbed (Swamee listed first, the converse of the order above), on the points that stay
+// submerged: op1 fitted, op1* validated (all their samples
+// satisfy condition 10 in that truth; op2 and op2* cross it 20 % and 7 % of the time, where
+// eqs. 9/11 jump and the truth chatters: docs/calibration.md, "Not achieved"). Swamee's law cannot
+// take eq. 11's square root of the head (its submerged law goes like a 0.7 power, with the
+// border's term), so the comparison must keep the simple law. Measured: costs 0.0137 against
+// 0.0229; on op1* y_dw 4.27 -> 0.23 mm (18×) and y_dwe 0.97 -> 0.20 mm (4.9×: the 100-cell grid
+// limits it — the grid check says twice the cells move the levels by 0.26 mm).
+TEST(Calibrate, ComparingGateLawsKeepsTheSimpleLawsOnACanalThatFollowsThemInSubmergedFlow) {
+  Scenario s = model();
+  s.head_gate->discharge_coefficient = 0.9;
+  s.head_gate->submerged_discharge_coefficient = 1.1;
+  s.pools.front().manning_n *= 1.5;
+  s.downstream.gate.opening_m += 1e-3;
+  s.sensors.offset_y_dw_mm = 2.0;
+  s.sensors.offset_y_dwe_mm = -1.5;
+  s.sensors.resolution_mm = 0.0;
+  testing::TruthVariation v;
+  v.cells_factor = 2;
+  v.simple_gate_laws = true;
+  const Scenario truth = testing::independent_truth(s, v);
+  CalibrateOptions o;
+  o.gate_laws = {scenarios::GateLaw::swamee, scenarios::GateLaw::simple};
+  const Calibration c = calibrate(model(), record(truth, {"op1"}, 40.0), record(truth, {"op1*"}, 40.0), o);
+  ASSERT_TRUE(c.ok) << c.message;
+  ASSERT_EQ(c.gate_laws.size(), 2u);
+  const GateLawFit& swamee = c.gate_laws[0];
+  const GateLawFit& simple = c.gate_laws[1];
+  ASSERT_TRUE(swamee.ok && simple.ok) << swamee.message << simple.message;
+  EXPECT_TRUE(simple.kept);
+  EXPECT_GT(swamee.cost_after, 1.4 * simple.cost_after) << swamee.cost_after << " against " << simple.cost_after;
+  EXPECT_EQ(c.calibrated.head_gate->law, scenarios::GateLaw::simple);
+  EXPECT_EQ(c.calibrated.downstream.gate.law, scenarios::GateLaw::simple);
+  int validated = 0;
+  for (const ChannelFit& f : c.fits) {
+    if (!f.validation) continue;
+    if (f.channel == columns::level_below_gate) {
+      ++validated;
+      EXPECT_LE(f.rms_after, f.rms_before / 5.0) << f.channel << ": " << f.rms_before << " -> " << f.rms_after << " mm";
+    } else if (f.channel == columns::level_downstream_end) {
+      ++validated;
+      EXPECT_LE(f.rms_after, f.rms_before / 3.0) << f.channel << ": " << f.rms_before << " -> " << f.rms_after << " mm";
+    }
+  }
+  EXPECT_EQ(validated, 2);
+}
+
 // Laws are compared on the scenario's sluice gates: a canal without one is one line of error, and
 // a law named twice is an invalid option.
 TEST(Calibrate, ComparingGateLawsNeedsASluiceGate) {
