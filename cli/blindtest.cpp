@@ -68,7 +68,7 @@ void run(const BlindtestArguments& args) {
                   t.message.c_str());
       if (t.second) {
         std::string named;
-        for (const auto& n : t.named) named += (named.empty() ? "" : ", ") + n;
+        for (const auto& n : t.named) named += (named.empty() ? "" : ", ") + n.effect;
         std::printf("       + %-19s %6.3f  named: %s (%s)\n", t.second->effect.c_str(), t.second->value,
                     named.empty() ? "nothing" : named.c_str(), t.both_named ? "both" : "not both");
       }

@@ -308,10 +308,15 @@ nlohmann::json to_json(const BlindtestResult& r) {
   auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json trials = json::array();
   for (const auto& t : r.trials) {
+    json named = json::array(), named_values = json::array();
+    for (const auto& n : t.named) {
+      named.push_back(n.effect);
+      named_values.push_back(n.value);
+    }
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
                       {"verdict", t.verdict}, {"correct", t.correct}, {"estimate", num(t.estimate)},
                       {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
-                      {"seconds", t.seconds}, {"message", t.message}, {"named", t.named}, {"named_values", t.named_values}});
+                      {"seconds", t.seconds}, {"message", t.message}, {"named", named}, {"named_values", named_values}});
     if (t.second) {
       trials.back()["second"] = {{"concealed", t.second->effect}, {"value", t.second->value}};
       trials.back()["both_named"] = t.both_named;

@@ -75,18 +75,22 @@ struct BlindtestOptions {
   Status validate() const;
 };
 
-struct ConcealedEffect {
+// An effect of the catalog with its parameter's value (in the catalog parameter's unit): concealed
+// in a trial's truth, or named by the trial's diagnosis.
+struct EffectValue {
   std::string effect = "none";
-  double value = 0.0;               // in the catalog parameter's unit
+  double value = 0.0;
 };
+using ConcealedEffect = EffectValue;
 
 struct Trial {
   int index = 0;
   ConcealedEffect truth;
   std::optional<ConcealedEffect> second;  // two-effect trials
   std::string verdict;
-  std::vector<std::string> named;   // the diagnosis' explanation: the verdict and any further effects
-  std::vector<double> named_values; // their jointly refitted parameters, in the catalog's units
+  // The diagnosis' explanation, the verdict first and any further effects, each with its jointly
+  // refitted parameter in the catalog's units.
+  std::vector<EffectValue> named;
   bool both_named = false;          // two-effect trials: both concealed effects are in `named`
   std::string truth_drawn;          // realistic: the perturbed physics of this trial's truth
   double estimate = 0.0;            // the diagnosis' parameter for the true effect's name

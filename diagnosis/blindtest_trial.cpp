@@ -112,14 +112,12 @@ void run_trial(const TrialContext& c, Trial& trial) {
   if (!d.ok) throw std::runtime_error(d.message);
   trial.verdict = d.verdict;
   trial.named.clear();
-  trial.named_values.clear();
-  for (const auto& e : d.explanation) {
-    trial.named.push_back(e.name);
-    trial.named_values.push_back(e.parameter.value);
-  }
+  for (const auto& e : d.explanation) trial.named.push_back({e.name, e.parameter.value});
   trial.correct = trial.verdict == trial.truth.effect;
   if (trial.second) {
-    const auto named = [&](const std::string& e) { return std::find(trial.named.begin(), trial.named.end(), e) != trial.named.end(); };
+    const auto named = [&](const std::string& e) {
+      return std::any_of(trial.named.begin(), trial.named.end(), [&](const EffectValue& n) { return n.effect == e; });
+    };
     trial.both_named = named(trial.truth.effect) && named(trial.second->effect);
   }
   trial.parameter_error = std::numeric_limits<double>::quiet_NaN();
