@@ -15,6 +15,15 @@ constexpr double kNullRatio = 1e-9;       // eigenvalue / largest below which a 
 constexpr double kHighCorrelation = 0.95;
 constexpr double kHighRelativeStd = 0.5;
 
+// The magnitude a parameter's std and sensitivity are relative to: its value, but for a parameter
+// searched linearly (offsets, the delay, the zero-head regularisation, openings, the bed slope)
+// at least ten finite-difference steps. Those can be zero — clean recordings have offsets near 0
+// — and an offset of 1e-4 ± 4e-4 mm is determined to far below the lab's 0.05 mm resolution, not
+// "relative std 400 %". The step is the change the parameter's unit resolves (0.05 mm, 0.02 s).
+double magnitude(const Parameter& p, double value) {
+  return p.transform == Transform::log ? std::abs(value) : std::max(std::abs(value), 10.0 * p.step);
+}
+
 // "name" or "ln(name)": the search coordinate of a parameter, in words.
 std::string coordinate(const Parameter& p) { return p.transform == Transform::log ? "ln(" + p.name + ")" : p.name; }
 
@@ -163,7 +172,7 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
     const double sz = std::sqrt(std::max(Cz(jj, jj), 0.0));
     out.std[j] = undetermined[j] ? std::numeric_limits<double>::infinity()
                                  : (parameters[j].transform == Transform::log ? value * sz : sz);
-    const double s = parameters[j].transform == Transform::log ? 1.0 : std::max(std::abs(value), 10.0 * parameters[j].step);
+    const double s = parameters[j].transform == Transform::log ? 1.0 : magnitude(parameters[j], value);
     out.sensitivity[j] = std::sqrt(J.col(jj).squaredNorm() / static_cast<double>(std::max<Eigen::Index>(n, 1))) * s;
   }
   for (std::size_t a = 0; a < np; ++a) {
@@ -190,9 +199,8 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
     }
   }
   for (std::size_t j = 0; j < np; ++j) {
-    const double value = parameters[j].from_search(z[j]);
-    if (undetermined[j] || value == 0.0) continue;
-    const double relative = out.std[j] / std::abs(value);
+    if (undetermined[j]) continue;
+    const double relative = out.std[j] / magnitude(parameters[j], parameters[j].from_search(z[j]));
     if (relative > kHighRelativeStd) {
       ParameterStatistics::Unidentified u;
       u.parameters = {parameters[j].name};

@@ -39,8 +39,9 @@ double autocorrelation_inflation(const std::vector<std::vector<double>>& series)
 // the largest are not determined (exact trade-offs): their parameters get std = +inf and are named
 // with the combination that is determined. Standard deviations in parameter units by the delta
 // method (log: σ_v = v σ_z). Pairs with |correlation| > 0.95 and parameters with a relative std
-// above 50 % are named too. Composite scaled sensitivity: sqrt(Σ_i (J_ij s_j)² / N), s_j = 1 for
-// log parameters (a unit of log), max(|v_j|, 10 steps) for linear ones.
+// above 50 % are named too, relative to |v_j| for log parameters and to max(|v_j|, 10 steps) for
+// linear ones (offsets sit near zero). Composite scaled sensitivity: sqrt(Σ_i (J_ij s_j)² / N),
+// s_j = 1 for log parameters (a unit of log), max(|v_j|, 10 steps) for linear ones.
 ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameters, const std::vector<double>& z,
                                          const std::vector<double>& jacobian, const std::vector<double>& residuals,
                                          const std::vector<std::vector<double>>& series);
