@@ -74,12 +74,14 @@ struct SimulateOptions {
   // Called with the fraction done in [0, 1], about every 1% of the run.
   ProgressCallback progress;
   Drive drive;
-  // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s].
+  // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s]: at most
+  // this long, stopping once the canal has settled (simulate.cpp, settled_since) but never before
+  // the experiment's settle_s.
   double settle_time = 600.0;
   bool use_steady_state_solver = true;
   // Past the ceilings of scenarios/run_cost.hpp (`--allow-long`).
   bool allow_long_run = false;
-  // When Newton fails: throw std::runtime_error naming the failure (true), or march for
+  // When Newton fails: throw std::runtime_error naming the failure (true), or march for (at most)
   // settle_time with the command held at its operating point and warn, naming the state the
   // experiment then starts from (false). Never silent.
   bool require_steady_state = false;
