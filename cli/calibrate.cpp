@@ -135,10 +135,7 @@ int run(const CalibrateArguments& args) {
     // with the replay the diagnosis uses, or the difference between the two replays shows up as
     // spurious effects (an upstream sensor's offset, absorbed by a discharge coefficient under the
     // recorded-upstream drive, reappears as a sensor offset under the upstream model).
-    const std::vector<std::string> channels = options.replay.channels;
-    options.replay = diagnosis::diagnosis_replay(diagnosis::DiagnoseOptions{});
-    options.replay.fit_fraction = 1.0;
-    options.replay.channels = channels;
+    options.replay = diagnosis::calibration_replay_for_diagnosis();
   }
   if (!args.channels.empty()) options.replay.channels = args.channels;
   options.threads = args.threads;

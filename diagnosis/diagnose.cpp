@@ -7,6 +7,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "calibration/calibrate.hpp"
 #include "calibration/replay.hpp"
 #include "core/declared_units.hpp"
 #include "core/parallel.hpp"
@@ -34,6 +35,13 @@ calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
           // between parameters 1 % of their range apart, a false gradient for the fits.
           .step_to_command_changes = true,
           .warning = nullptr};
+}
+
+calibration::ReplayOptions calibration_replay_for_diagnosis() {
+  calibration::ReplayOptions r = diagnosis_replay(DiagnoseOptions{});
+  r.fit_fraction = 1.0;
+  r.channels = calibration::CalibrateOptions::default_replay().channels;
+  return r;
 }
 
 namespace scenario_engine {

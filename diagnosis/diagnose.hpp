@@ -103,6 +103,11 @@ using calibration::check_recordings;
 // spurious effect.
 calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& options);
 
+// The replay `canalsim calibrate` uses by default (`--replay diagnosis`): the diagnosis' drive
+// (the upstream model drives the head gate), every sample fitted, the calibration's channels —
+// so that the scenario it writes can be diagnosed next.
+calibration::ReplayOptions calibration_replay_for_diagnosis();
+
 // Runs the diagnosis. Recordings in declared units (u_unit / u_scale_mm_per_unit, y_unit /
 // y_scale_mm_per_unit; docs/recording-format.md) are converted to millimetres first. Without
 // options.calibrated_std (baseline_rms_mm), the scenario's own [calibration.std] table
