@@ -21,6 +21,17 @@ namespace {
 
 using namespace canalsim;
 
+// The truth's op1–op4 (255.5 s each), named as the files a laboratory would pass.
+std::vector<Recording> recordings_of(const scenarios::Scenario& truth) {
+  std::vector<Recording> out;
+  for (const char* name : {"op1", "op2", "op3", "op4"}) {
+    Recording r = scenarios::simulate(truth, *truth.find_experiment(name));
+    r.source = std::string(name) + ".csv";
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
 // The truth on `cells` cells (minmod at Courant `cfl`), the six parameters perturbed.
 std::vector<Recording> truth_recordings(int cells = 150, double cfl = 0.5) {
   scenarios::Scenario truth = scenarios::builtin_scenario("lab");
@@ -34,13 +45,7 @@ std::vector<Recording> truth_recordings(int cells = 150, double cfl = 0.5) {
   truth.sensors.offset_y_dw_mm = 2.0;
   truth.sensors.offset_y_dwe_mm = -1.5;
   truth.sensors.noise_std_mm = 0.05;
-  std::vector<Recording> out;
-  for (const char* name : {"op1", "op2", "op3", "op4"}) {
-    Recording r = scenarios::simulate(truth, *truth.find_experiment(name));
-    r.source = std::string(name) + ".csv";
-    out.push_back(std::move(r));
-  }
-  return out;
+  return recordings_of(truth);
 }
 
 // The timed loop: calibrate the lab on `recordings` with `options`; the counters every benchmark
@@ -124,13 +129,7 @@ std::vector<Recording> clean_independent_recordings() {
   truth.head_gate->zero_head_m = 4e-3;
   truth.pools.front().manning_n = 0.014;
   truth.downstream.gate.opening_m += 0.5e-3;
-  std::vector<Recording> out;
-  for (const char* name : {"op1", "op2", "op3", "op4"}) {
-    Recording r = scenarios::simulate(truth, *truth.find_experiment(name));
-    r.source = std::string(name) + ".csv";
-    out.push_back(std::move(r));
-  }
-  return out;
+  return recordings_of(truth);
 }
 
 // What `canalsim calibrate --scenario lab op1.csv ... op4.csv -o cal.toml` runs: the diagnosis'

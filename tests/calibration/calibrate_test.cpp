@@ -23,10 +23,8 @@ using scenarios::Scenario;
 // The nominal model: the laboratory canal as built in (100 cells, van Leer, Courant 0.8).
 Scenario model() { return scenarios::builtin_scenario("lab"); }
 
-// The truth: the canal with the six parameters perturbed, simulated on 200 cells (or
-// `cells_factor` × 100) with the minmod limiter at Courant 0.45; its sensors are applied by
-// realistic_levels() below.
-Scenario perturbed_truth(int cells_factor = 2) {
+// The model with the six parameters perturbed at once.
+Scenario six_perturbed() {
   Scenario s = model();
   s.head_gate->discharge_coefficient = 0.9;            // Cd free × 0.9
   s.head_gate->submerged_discharge_coefficient = 1.1;  // Cd submerged × 1.1
@@ -35,10 +33,17 @@ Scenario perturbed_truth(int cells_factor = 2) {
   s.sensors.offset_y_dw_mm = 2.0;
   s.sensors.offset_y_dwe_mm = -1.5;
   s.sensors.resolution_mm = 0.0;                       // the realistic sensors quantise
+  return s;
+}
+
+// The truth: the canal with the six parameters perturbed, simulated on 200 cells (or
+// `cells_factor` × 100) with the minmod limiter at Courant 0.45; its sensors are applied by
+// realistic_levels() below.
+Scenario perturbed_truth(int cells_factor = 2) {
   testing::TruthVariation v;
   v.cells_factor = cells_factor;
   v.cfl = 0.45;
-  return testing::independent_truth(s, v);
+  return testing::independent_truth(six_perturbed(), v);
 }
 
 std::vector<Recording> record(const Scenario& truth, const std::vector<std::string>& experiments, double seconds) {
@@ -278,18 +283,10 @@ TEST(Calibrate, ComparingGateLawsKeepsSwameesOnACanalThatFollowsIt) {
 // 0.0229; on op1* y_dw 4.27 -> 0.23 mm (18×) and y_dwe 0.97 -> 0.20 mm (4.9×: the 100-cell grid
 // limits it — the grid check says twice the cells move the levels by 0.26 mm).
 TEST(Calibrate, ComparingGateLawsKeepsTheSimpleLawsOnACanalThatFollowsThemInSubmergedFlow) {
-  Scenario s = model();
-  s.head_gate->discharge_coefficient = 0.9;
-  s.head_gate->submerged_discharge_coefficient = 1.1;
-  s.pools.front().manning_n *= 1.5;
-  s.downstream.gate.opening_m += 1e-3;
-  s.sensors.offset_y_dw_mm = 2.0;
-  s.sensors.offset_y_dwe_mm = -1.5;
-  s.sensors.resolution_mm = 0.0;
   testing::TruthVariation v;
   v.cells_factor = 2;
   v.simple_gate_laws = true;
-  const Scenario truth = testing::independent_truth(s, v);
+  const Scenario truth = testing::independent_truth(six_perturbed(), v);
   CalibrateOptions o;
   o.gate_laws = {scenarios::GateLaw::swamee, scenarios::GateLaw::simple};
   const Calibration c = calibrate(model(), record(truth, {"op1"}, 40.0), record(truth, {"op1*"}, 40.0), o);
