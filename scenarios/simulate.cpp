@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "scenarios/design.hpp"
 #include "scenarios/prbs.hpp"
@@ -21,7 +23,7 @@ namespace canalsim::scenarios {
 namespace {
 
 constexpr double kMm = 1e-3;
-constexpr double kSettledDepth = 1e-6;      // m, per chunk of marching (settled_since)
+constexpr double kSettledDepth = 1e-6;      // m, per chunk of marching (settled)
 constexpr double kSettledDischarge = 1e-6;  // of the largest discharge, per chunk
 
 
@@ -354,38 +356,34 @@ void march_to(solver::Canal& canal, double t_end, RunCostGuard& guard, const std
 }
 
 // The state time marching settles: the depth and discharge of every cell of every pool.
-std::vector<double> marched_state(const solver::Canal& canal) {
-  std::vector<double> state;
+struct MarchedState {
+  std::vector<double> depth, discharge;
+};
+
+MarchedState marched_state(const solver::Canal& canal) {
+  MarchedState state;
   for (int r = 0; r < canal.reach_count(); ++r) {
     const auto& reach = canal.reach(r);
-    for (int i = 0; i < reach.cells(); ++i) state.push_back(reach.depth(i));
-    state.insert(state.end(), reach.discharge().begin(), reach.discharge().end());
+    for (int i = 0; i < reach.cells(); ++i) state.depth.push_back(reach.depth(i));
+    state.discharge.insert(state.discharge.end(), reach.discharge().begin(), reach.discharge().end());
   }
   return state;
 }
 
+double largest_change(const std::vector<double>& a, const std::vector<double>& b) {
+  double largest = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) largest = std::max(largest, std::abs(a[k] - b[k]));
+  return largest;
+}
+
 // Whether the canal moved less than a micrometre of depth and a millionth of its largest discharge
-// since `before` (marched_state, one chunk of marching earlier) — fifty times below the lab's
-// 0.05 mm resolution, ten times the generalised minmod limiter's limit cycle (docs/numerics.md).
-bool settled_since(const solver::Canal& canal, const std::vector<double>& before, std::vector<double>& now) {
-  now = marched_state(canal);
-  if (now.size() != before.size()) return false;
+// between two states one chunk of marching apart — fifty times below the lab's 0.05 mm
+// resolution, ten times the generalised minmod limiter's limit cycle (docs/numerics.md).
+bool settled(const MarchedState& before, const MarchedState& now) {
   double q_scale = 0.0;
-  for (int r = 0; r < canal.reach_count(); ++r) {
-    for (double q : canal.reach(r).discharge()) q_scale = std::max(q_scale, std::abs(q));
-  }
-  std::size_t k = 0;
-  for (int r = 0; r < canal.reach_count(); ++r) {
-    const auto& reach = canal.reach(r);
-    const auto cells = static_cast<std::size_t>(reach.cells());
-    for (std::size_t i = 0; i < cells; ++i, ++k) {
-      if (std::abs(now[k] - before[k]) > kSettledDepth) return false;
-    }
-    for (std::size_t i = 0; i < reach.discharge().size(); ++i, ++k) {
-      if (std::abs(now[k] - before[k]) > kSettledDischarge * q_scale) return false;
-    }
-  }
-  return true;
+  for (double q : now.discharge) q_scale = std::max(q_scale, std::abs(q));
+  return largest_change(before.depth, now.depth) <= kSettledDepth &&
+         largest_change(before.discharge, now.discharge) <= kSettledDischarge * q_scale;
 }
 
 InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options,
@@ -428,18 +426,19 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
   double marched_s = marching;
   if (marching > 0.0) {
     // Time marching: chunks for the progress line. In place of a failed Newton it stops once two
-    // chunks in a row left the canal settled (settled_since) and the experiment's own settle_s
+    // chunks in a row left the canal settled and the experiment's own settle_s
     // has passed: on the lab's 400 cells with minmod that is after 120 of the 600 s.
     result.progress_weight = 0.5;
     const bool until_settled = !solved;
-    std::vector<double> before = marched_state(b.canal), now;
+    MarchedState before = marched_state(b.canal);
     int settled_chunks = 0;
     for (int k = 1; k <= 20; ++k) {
       march_to(b.canal, -marching + marching * k / 20.0, guard, "settling");
       report(result.progress_weight * k / 20.0);
       if (!until_settled) continue;
-      settled_chunks = settled_since(b.canal, before, now) ? settled_chunks + 1 : 0;
-      before.swap(now);
+      MarchedState now = marched_state(b.canal);
+      settled_chunks = settled(before, now) ? settled_chunks + 1 : 0;
+      before = std::move(now);
       if (settled_chunks >= 2 && k < 20 && marching * k / 20.0 >= e.settle_s) {
         marched_s = marching * k / 20.0;
         report(result.progress_weight);
