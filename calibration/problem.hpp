@@ -32,7 +32,8 @@ class ReplayProblem {
   std::vector<double> start() const;                                  // z of the scenario's values
   scenarios::Scenario scenario_at(const std::vector<double>& z) const;
   // What the sensors would read at z, per recording (unrounded levels). Throws what the
-  // simulation throws (std::runtime_error naming time and cell).
+  // simulation throws (std::runtime_error naming time and cell). Simulates only where the
+  // hydraulic parameters differ from both the last point asked and the last Jacobian's.
   std::vector<Channels> predict(const std::vector<double>& z);
   // The same for an edited scenario (the grid check): always simulated.
   std::vector<Channels> predict(const scenarios::Scenario& scenario);
@@ -70,6 +71,8 @@ class ReplayProblem {
   std::mutex cache_mutex_;
   std::vector<double> cached_z_;
   std::vector<Channels> cached_truth_;
+  std::vector<double> jacobian_base_z_;           // where the last Jacobian was taken
+  std::vector<Channels> jacobian_base_truth_;
   std::vector<double> cached_jacobian_z_, cached_jacobian_;   // the last Jacobian (not thread-safe)
 };
 

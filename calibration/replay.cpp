@@ -261,8 +261,14 @@ std::vector<double> command_switch_times(const std::vector<double>& t, const std
   // tolerance: a switch exactly at a sample instant (0.5 s clock, 0.13 s samples: every 6.5 s)
   // may show at that sample or the next, depending on rounding in the recorder.
   const double tol = 0.03 * h;
+  // The same test in any order; the last change first, then the first, since a wrong period
+  // fails soonest where it has accumulated most and a wrong phase where it starts: most of the
+  // candidates below are rejected by one or two changes instead of a run of them.
+  std::vector<std::size_t> order = changes;
+  std::swap(order.front(), order.back());
+  std::swap(order[1], order.back());
   auto feasible = [&](double period, double phase) {
-    for (std::size_t k : changes) {
+    for (std::size_t k : order) {
       const double m = std::ceil((t[k - 1] - tol - phase) / period);
       const double s = phase + m * period;
       if (!(s >= t[k - 1] - tol && s <= t[k] + tol)) return false;

@@ -116,5 +116,35 @@ TEST(ReplayProblem, SimulationsHandedOverAreReusedAtTheStart) {
   EXPECT_EQ(primed.simulations(), 1);
 }
 
+// Levenberg–Marquardt takes the Jacobian at its current point, then evaluates candidates; when the
+// last ones fail, the statistics ask again for the prediction at that point. It is kept apart from
+// the candidates' (problem.cpp, truth_at): the same prediction as simulating afresh, no simulation.
+TEST(ReplayProblem, ThePredictionWhereTheJacobianWasTakenOutlivesLaterCandidates) {
+  const Scenario s = short_lab();
+  const std::vector<Recording> recordings{record(s, "op2", 30.0)};
+  const std::vector<std::string> specs{"cd_free", "offset_y_dw_mm"};
+  ReplayProblem problem(s, select_parameters(s, specs), recordings, ReplayOptions{}, 1);
+  ReplayProblem fresh(s, select_parameters(s, specs), recordings, ReplayOptions{}, 1);
+  std::vector<double> z = problem.start();
+  z[0] += 0.02;
+  const std::vector<double> r = problem.residuals(problem.predict(z));
+  problem.jacobian(z, r);
+  const int after_jacobian = problem.simulations();
+  EXPECT_EQ(after_jacobian, 2);  // the point, and cd_free's step (the offset only re-observes)
+  for (double candidate : {0.05, -0.04}) {  // two candidates, each simulated
+    std::vector<double> away = z;
+    away[0] += candidate;
+    problem.predict(away);
+  }
+  EXPECT_EQ(problem.simulations(), after_jacobian + 2);
+  const std::vector<Channels> again = problem.predict(z);
+  EXPECT_EQ(problem.simulations(), after_jacobian + 2);
+  const std::vector<Channels> simulated = fresh.predict(z);
+  for (const auto& [channel, y] : simulated.front()) {
+    ASSERT_TRUE(again.front().count(channel)) << channel;
+    EXPECT_LT(rms_difference(again.front().at(channel), y), 1e-12) << channel;
+  }
+}
+
 }  // namespace
 }  // namespace canalsim::calibration
