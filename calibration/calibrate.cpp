@@ -635,7 +635,7 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
   }
   const bool replayed = o.replay.use_recorded_upstream && recordings.front().has(columns::upstream_level);
   const std::vector<std::string> specs =
-      o.parameters.empty() ? default_parameters(scenario, recordings, replayed) : o.parameters;
+      chosen_parameters(o.parameters, default_parameters(scenario, recordings, replayed));
   select_parameters(scenario, specs);  // bad specs: one line before any work
   const RefinementFollows follows = follows_round(0, 0.0, o);
   Handover handover;  // with gate laws compared, the refined grid simulates its start itself

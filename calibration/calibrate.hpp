@@ -39,7 +39,8 @@
 namespace canalsim::calibration {
 
 struct CalibrateOptions {
-  // Parameter specs, NAME or NAME:LOW:HIGH; empty = default_parameters().
+  // Parameter specs, NAME or NAME:LOW:HIGH; empty = default_parameters(); every one +NAME or
+  // +NAME:LOW:HIGH = the default set and those (chosen_parameters).
   std::vector<std::string> parameters;
   // The replay: recorded upstream level on, every sample after the initial state compared, and
   // each recording started from the steady state at its own first level.

@@ -181,6 +181,28 @@ std::vector<std::string> default_parameters(const Scenario& s, const std::vector
   return names;
 }
 
+std::vector<std::string> chosen_parameters(const std::vector<std::string>& given, std::vector<std::string> defaults) {
+  const auto added = [](const std::string& spec) { return !spec.empty() && spec.front() == '+'; };
+  const auto count = static_cast<std::size_t>(std::count_if(given.begin(), given.end(), added));
+  if (count == 0) return given.empty() ? defaults : given;
+  if (count != given.size()) {
+    throw InputError("--params: '" + *std::find_if_not(given.begin(), given.end(), added) + "' and '" +
+                     *std::find_if(given.begin(), given.end(), added) +
+                     "' mixed (expected every parameter named, or +NAME for each one added to the default set)");
+  }
+  const auto name_of = [](const std::string& spec) { return spec.substr(0, spec.find(':')); };
+  for (const std::string& spec : given) {
+    const std::string bare = spec.substr(1);
+    const auto same = std::find_if(defaults.begin(), defaults.end(), [&](const std::string& d) { return name_of(d) == name_of(bare); });
+    if (same != defaults.end()) {
+      *same = bare;
+    } else {
+      defaults.push_back(bare);
+    }
+  }
+  return defaults;
+}
+
 namespace {
 
 // "x" as a finite number, or InputError naming the parameter spec.

@@ -67,6 +67,12 @@ std::string parameter_names(const std::vector<Parameter>& catalog);
 std::vector<std::string> default_parameters(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
                                             bool upstream_replayed);
 
+// The specs a calibration fits, from those the user gave (CalibrateOptions::parameters, --params)
+// and the default set: none given = the default set; every one "+NAME" or "+NAME:LOW:HIGH" = the
+// default set and those added (a default named again takes the bounds given, in its place);
+// otherwise the specs given. Throws InputError for a mix of the two forms.
+std::vector<std::string> chosen_parameters(const std::vector<std::string>& given, std::vector<std::string> defaults);
+
 // The catalog entries named, in order; a spec "NAME:LOW:HIGH" replaces the bounds. Throws
 // InputError naming an unknown or repeated name (with the catalog's names), malformed bounds, and
 // a start (the scenario's value) outside the bounds.

@@ -182,7 +182,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("-o,--out", args->out, "Write the calibrated scenario (TOML)")->required();
   cmd->add_option("--params", args->params,
                   "Parameters to fit, NAME or NAME:LOW:HIGH, comma-separated (default: the scenario's unknowns; "
-                  "docs/calibration.md)")
+                  "+NAME adds one to them; docs/calibration.md)")
       ->delimiter(',');
   cmd->add_option("--channels", args->channels,
                   "Channels compared, comma-separated (default y_dwe_mm,y_dw_mm,y_up_mm,q_lps; those a recording "

@@ -456,6 +456,33 @@ TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
   EXPECT_NE(free.starts_note.find("one start"), std::string::npos) << free.starts_note;
 }
 
+// --params +NAME: the default set and NAME; a default named again keeps its place with the bounds
+// given; the two forms mixed are refused, naming one of each.
+TEST(Calibrate, PlusNameAddsToTheDefaultSet) {
+  const std::vector<std::string> defaults{"cd_free", "cd_submerged", "manning_n", "offset_y_dwe_mm"};
+  EXPECT_EQ(chosen_parameters({}, defaults), defaults);
+  EXPECT_EQ(chosen_parameters({"manning_n"}, defaults), std::vector<std::string>{"manning_n"});
+  EXPECT_EQ(chosen_parameters({"+zero_head_mm"}, defaults),
+            (std::vector<std::string>{"cd_free", "cd_submerged", "manning_n", "offset_y_dwe_mm", "zero_head_mm"}));
+  EXPECT_EQ(chosen_parameters({"+manning_n:0.01:0.02", "+zero_head_mm:0:8"}, defaults),
+            (std::vector<std::string>{"cd_free", "cd_submerged", "manning_n:0.01:0.02", "offset_y_dwe_mm", "zero_head_mm:0:8"}));
+  try {
+    chosen_parameters({"cd_free", "+zero_head_mm"}, defaults);
+    FAIL() << "the two forms mixed were accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'cd_free' and '+zero_head_mm' mixed"), std::string::npos) << e.what();
+  }
+  // Through calibrate(): the catalog still checks the names added.
+  CalibrateOptions o;
+  o.parameters = {"+zero_hed_mm"};
+  try {
+    calibrate(model(), truth_recordings(), {}, o);
+    FAIL() << "an unknown parameter added was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown parameter 'zero_hed_mm'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Calibrate, BadInputIsOneLineNamingWhatIsWrong) {
   CalibrateOptions o;
   o.parameters = {"cd_fre"};

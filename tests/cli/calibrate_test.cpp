@@ -37,6 +37,7 @@ TEST(Calibrate, BadInputIsOneLineAndWritesNothing) {
   for (const Case& c : {Case{"--params cd_fre", "unknown parameter 'cd_fre'"},
                         Case{"--params cd_free:1.2:1.5", "outside its bounds [1.2, 1.5]"},
                         Case{"--params manning_n:abc:1", "bound 'abc' is not a number"},
+                        Case{"--params manning_n,+zero_head_mm", "'manning_n' and '+zero_head_mm' mixed"},
                         Case{"--gate-laws swamee,linear", "linear"}}) {
     const RunResult r = run_canalsim("calibrate --scenario lab " + rec.string() + " -o keep.toml " + c.args, scratch);
     EXPECT_TRUE(is_one_error_line(r)) << c.args << ": " << r.err;
