@@ -81,10 +81,24 @@ class StopAtTheModelsResolution : public ceres::IterationCallback {
 };
 
 
+// With secant Jacobians (ReplayProblem::use_secant_updates), a step that failed asks for the
+// next Jacobian by differences: the secant one's model of the cost was wrong at that scale.
+class RefreshTheJacobianAfterAFailedStep : public ceres::IterationCallback {
+ public:
+  explicit RefreshTheJacobianAfterAFailedStep(ReplayProblem& problem) : problem_(problem) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (!s.step_is_successful) problem_.refresh_jacobian();
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  ReplayProblem& problem_;
+};
+
 }  // namespace
 
 Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_iterations, const ProgressCallback& progress_to,
-                        int run, int runs, double function_tolerance) {
+                        int run, int runs, double function_tolerance, bool secant) {
   ReplayCost cost(problem);
   ceres::Problem::Options po;
   po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -112,8 +126,12 @@ Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_i
   so.callbacks.push_back(&progress);
   StopAtTheModelsResolution resolution;
   so.callbacks.push_back(&resolution);
+  RefreshTheJacobianAfterAFailedStep refresh(problem);
+  if (secant) so.callbacks.push_back(&refresh);
+  problem.use_secant_updates(secant);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &lsq, &summary);
+  problem.use_secant_updates(false);
   Run out;
   out.z = z;
   out.iterations = static_cast<int>(summary.iterations.size());

@@ -28,8 +28,9 @@ constexpr double kPreciseTolerance = 1e-6, kScoutTolerance = 1e-3;
 
 // From z (search coordinates) within the parameters' bounds, at most `max_iterations`; the cost
 // is the weighted cost per sample, infinite when no usable solution was found. `run` of `runs`
-// for the progress messages.
+// for the progress messages. `secant`: Jacobians after the first by secant updates
+// (ReplayProblem::use_secant_updates), by differences again after a failed step.
 Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_iterations, const ProgressCallback& progress,
-                        int run, int runs, double function_tolerance);
+                        int run, int runs, double function_tolerance, bool secant = false);
 
 }  // namespace canalsim::calibration

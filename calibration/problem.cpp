@@ -139,17 +139,10 @@ std::vector<std::vector<double>> ReplayProblem::residual_series(const std::vecto
 
 std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const std::vector<double>& r0) {
   // The statistics ask again for the Jacobian Levenberg–Marquardt took at its last point.
-  if (z == cached_jacobian_z_) return cached_jacobian_;
-  const std::size_t p = parameters_.size(), n = replays_.size();
-  std::vector<double> J(rows_ * p, 0.0);
-  std::vector<double> steps(p);
-  for (std::size_t j = 0; j < p; ++j) {
-    const Parameter& q = parameters_[j];
-    double h = q.step;
-    // Step inwards at the upper bound.
-    if (z[j] + h > q.to_search(q.high)) h = -h;
-    steps[j] = h;
-  }
+  if (z == cached_jacobian_z_ && (!cached_jacobian_secant_ || (secant_ && !refresh_))) return cached_jacobian_;
+  const bool secant = secant_applies(z);
+  refresh_ = false;
+  std::vector<double> J(rows_ * parameters_.size(), 0.0);
   const std::vector<Channels> base_truth = truth_at(z);
   {
     // Kept apart from the last point: Levenberg–Marquardt's candidates that fail replace that,
@@ -158,10 +151,34 @@ std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const 
     jacobian_base_z_ = z;
     jacobian_base_truth_ = base_truth;
   }
+  difference_columns(z, r0, base_truth, secant, J);
+  if (secant) broyden_update(z, r0, J);
+  cached_jacobian_z_ = z;
+  cached_jacobian_r_ = r0;
+  cached_jacobian_ = J;
+  cached_jacobian_secant_ = secant;
+  return J;
+}
+
+void ReplayProblem::difference_columns(const std::vector<double>& z, const std::vector<double>& r0,
+                                       const std::vector<Channels>& base_truth, bool sensor_only, std::vector<double>& J) {
+  const std::size_t p = parameters_.size(), n = replays_.size();
+  std::vector<std::size_t> columns;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (!sensor_only || !hydraulic_[j]) columns.push_back(j);
+  }
+  std::vector<double> steps(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    const Parameter& q = parameters_[j];
+    double h = q.step;
+    // Step inwards at the upper bound.
+    if (z[j] + h > q.to_search(q.high)) h = -h;
+    steps[j] = h;
+  }
   // Every (parameter, recording) pair is one task: a simulation for hydraulic parameters, a
   // re-observation of the base simulation for sensor-only ones.
-  parallel_for(p * n, threads_, [&](std::size_t task) {
-    const std::size_t j = task / n, i = task % n;
+  parallel_for(columns.size() * n, threads_, [&](std::size_t task) {
+    const std::size_t j = columns[task / n], i = task % n;
     std::vector<double> zj = z;
     zj[j] += steps[j];
     const Scenario s = scenario_at(zj);
@@ -172,9 +189,35 @@ std::vector<double> ReplayProblem::jacobian(const std::vector<double>& z, const 
     residuals_of(i, prediction, r.data());
     for (std::size_t k = 0; k < r.size(); ++k) J[(first + k) * p + j] = (r[k] - r0[first + k]) / steps[j];
   });
-  cached_jacobian_z_ = z;
-  cached_jacobian_ = J;
-  return J;
+}
+
+bool ReplayProblem::secant_applies(const std::vector<double>& z) const {
+  if (!secant_ || refresh_ || cached_jacobian_z_.size() != z.size() || cached_jacobian_r_.size() != rows_) return false;
+  for (std::size_t j = 0; j < z.size(); ++j) {
+    if (hydraulic_[j] && z[j] != cached_jacobian_z_[j]) return true;
+  }
+  return false;
+}
+
+void ReplayProblem::broyden_update(const std::vector<double>& z, const std::vector<double>& r0, std::vector<double>& J) const {
+  const std::size_t p = parameters_.size();
+  std::vector<double> dz(p);
+  double hydraulic_step_squared = 0.0;
+  for (std::size_t j = 0; j < p; ++j) {
+    dz[j] = z[j] - cached_jacobian_z_[j];
+    if (hydraulic_[j]) hydraulic_step_squared += dz[j] * dz[j];
+  }
+  for (std::size_t k = 0; k < rows_; ++k) {
+    const double* last = &cached_jacobian_[k * p];
+    double* row = &J[k * p];
+    // What the last Jacobian (its hydraulic columns; the sensor-only ones as differenced now)
+    // did not predict of the residuals' change over the step.
+    double unexplained = r0[k] - cached_jacobian_r_[k];
+    for (std::size_t j = 0; j < p; ++j) unexplained -= (hydraulic_[j] ? last[j] : row[j]) * dz[j];
+    for (std::size_t j = 0; j < p; ++j) {
+      if (hydraulic_[j]) row[j] = last[j] + unexplained * dz[j] / hydraulic_step_squared;
+    }
+  }
 }
 
 }  // namespace canalsim::calibration

@@ -48,6 +48,16 @@ class ReplayProblem {
   std::vector<double> residuals(const std::vector<Channels>& prediction) const;
   // Row-major residual_count() × parameters Jacobian of residuals() at z (r0 = residuals at z).
   std::vector<double> jacobian(const std::vector<double>& z, const std::vector<double>& r0);
+  // Secant updates: while on, a Jacobian at a new point is the last one updated by the step
+  // between them (Broyden 1965's rank-one update of the hydraulic columns; the sensor-only ones,
+  // which cost no simulation, are differenced as always) — PEST's JACUPDATE, which saves the
+  // simulations of a Jacobian per step where the Jacobian changes little from step to step. Off:
+  // every Jacobian by differences, and one asked again at a point where a secant one was taken is
+  // differenced. refresh_jacobian(): the next one by differences (after a step that failed).
+  void use_secant_updates(bool on) { secant_ = on; }
+  void refresh_jacobian() { refresh_ = true; }
+  // Whether the last Jacobian was taken at z by differences (not a secant update).
+  bool differenced_at(const std::vector<double>& z) const { return z == cached_jacobian_z_ && !cached_jacobian_secant_; }
   // Residual series per recording and compared channel (recording units), for statistics.
   std::vector<std::vector<double>> residual_series(const std::vector<Channels>& prediction) const;
 
@@ -56,6 +66,14 @@ class ReplayProblem {
   Channels simulate(const scenarios::Scenario& s, std::size_t recording);
   Channels observed(const Channels& truth, const scenarios::Scenario& s) const;
   void residuals_of(std::size_t recording, const Channels& prediction, double* out) const;
+  // Columns of J by forward differences: every parameter's, or only the sensor-only ones'.
+  void difference_columns(const std::vector<double>& z, const std::vector<double>& r0,
+                          const std::vector<Channels>& base_truth, bool sensor_only, std::vector<double>& J);
+  // Whether jacobian(z) can update the last one: secant updates on, no refresh asked, a last
+  // Jacobian of this size and a step of the hydraulic parameters since.
+  bool secant_applies(const std::vector<double>& z) const;
+  // J's hydraulic columns: the last Jacobian's, updated so that J (z − z_last) = r0 − r_last.
+  void broyden_update(const std::vector<double>& z, const std::vector<double>& r0, std::vector<double>& J) const;
   bool same_hydraulics(const std::vector<double>& a, const std::vector<double>& b) const;
 
   const scenarios::Scenario& base_;
@@ -74,6 +92,9 @@ class ReplayProblem {
   std::vector<double> jacobian_base_z_;           // where the last Jacobian was taken
   std::vector<Channels> jacobian_base_truth_;
   std::vector<double> cached_jacobian_z_, cached_jacobian_;   // the last Jacobian (not thread-safe)
+  std::vector<double> cached_jacobian_r_;                      // the residuals where it was taken
+  bool cached_jacobian_secant_ = false;
+  bool secant_ = false, refresh_ = false;
 };
 
 }  // namespace canalsim::calibration

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "calibration/problem.hpp"
@@ -144,6 +145,56 @@ TEST(ReplayProblem, ThePredictionWhereTheJacobianWasTakenOutlivesLaterCandidates
     ASSERT_TRUE(again.front().count(channel)) << channel;
     EXPECT_LT(rms_difference(again.front().at(channel), y), 1e-12) << channel;
   }
+}
+
+// Secant Jacobians (ReplayProblem::use_secant_updates): the Jacobian at a new point costs no
+// simulation and satisfies Broyden's secant condition J (z1 − z0) = r(z1) − r(z0) exactly, its
+// sensor-only column is the differenced one (a re-observation, exact for an offset: −sqrt(w) per
+// mm), and with secant updates off the same point is differenced again.
+TEST(ReplayProblem, ASecantJacobianMatchesTheStepItWasUpdatedBy) {
+  const Scenario s = short_lab();
+  const std::vector<Recording> recordings{record(s, "op2", 30.0)};
+  const std::vector<std::string> specs{"cd_free", "manning_n", "offset_y_dw_mm"};
+  ReplayProblem problem(s, select_parameters(s, specs), recordings, ReplayOptions{}, 1);
+  problem.use_secant_updates(true);
+  const std::vector<double> z0 = problem.start();
+  const std::vector<double> r0 = problem.residuals(problem.predict(z0));
+  const std::vector<double> J0 = problem.jacobian(z0, r0);
+  EXPECT_EQ(problem.simulations(), 3);  // the point, cd_free's and manning_n's steps
+  std::vector<double> z1 = z0;
+  z1[0] += 0.03;
+  z1[1] -= 0.02;
+  z1[2] += 0.1;
+  const std::vector<double> r1 = problem.residuals(problem.predict(z1));
+  const std::vector<double> J1 = problem.jacobian(z1, r1);
+  EXPECT_EQ(problem.simulations(), 4);  // the new point only
+  const std::size_t p = specs.size();
+  double worst = 0.0, change = 0.0;
+  for (std::size_t k = 0; k < r0.size(); ++k) {
+    double predicted = 0.0;
+    for (std::size_t j = 0; j < p; ++j) predicted += J1[k * p + j] * (z1[j] - z0[j]);
+    worst = std::max(worst, std::abs(predicted - (r1[k] - r0[k])));
+    change = std::max(change, std::abs(r1[k] - r0[k]));
+  }
+  EXPECT_GT(change, 1e-3);
+  EXPECT_LT(worst, 1e-12 * change + 1e-15);
+  // The offset's column: where the level below the gate is compared, −sqrt(w) per mm, elsewhere 0.
+  const double minus_sqrt_w = -std::sqrt(problem.weights().weight.at(columns::level_below_gate));
+  int offset_rows = 0;
+  for (std::size_t k = 0; k < r0.size(); ++k) {
+    const double d = J1[k * p + 2];
+    if (d != 0.0) {
+      ++offset_rows;
+      EXPECT_NEAR(d, minus_sqrt_w, 1e-6 * std::abs(minus_sqrt_w));
+    }
+  }
+  EXPECT_EQ(static_cast<std::size_t>(offset_rows), problem.replays().front().n_fit);
+  // Off: the same point differenced (two hydraulic steps), then kept.
+  problem.use_secant_updates(false);
+  problem.jacobian(z1, r1);
+  EXPECT_EQ(problem.simulations(), 6);
+  problem.jacobian(z1, r1);
+  EXPECT_EQ(problem.simulations(), 6);
 }
 
 }  // namespace
