@@ -111,7 +111,7 @@ struct SensorSpec {
   double period_s = 0.13;           // sampling period of every sensor
   double resolution_mm = 0.05;      // quantisation step (paper eq. 17); 0 = none
   double noise_std_mm = 0.0;        // Gaussian noise on level sensors
-  double delay_s = 0.0;             // pure delay of the level sensors
+  double delay_s = 0.0;             // pure delay of the level sensors (negative: they lead the command)
   double offset_mm = 0.0;           // constant offset of the level sensors
   // Offsets of single level sensors, added to offset_mm (each sensor has its own zero).
   double offset_y_up_mm = 0.0, offset_y_dw_mm = 0.0, offset_y_dwe_mm = 0.0;

@@ -129,7 +129,7 @@ SensorSpec read_sensors(TomlTable t, const SensorSpec& defaults) {
   s.period_s = t.number("period_s", s.period_s, {0.0, 3600.0, true}, "s");
   s.resolution_mm = t.number("resolution_mm", s.resolution_mm, {0.0, 100.0}, "mm (0 = none)");
   s.noise_std_mm = t.number("noise_std_mm", s.noise_std_mm, {0.0, 100.0}, "mm");
-  s.delay_s = t.number("delay_s", s.delay_s, {0.0, 600.0}, "s");
+  s.delay_s = t.number("delay_s", s.delay_s, {-600.0, 600.0}, "s");
   s.offset_mm = t.number("offset_mm", s.offset_mm, {-1000.0, 1000.0}, "mm");
   s.offset_y_up_mm = t.number("offset_y_up_mm", s.offset_y_up_mm, {-1000.0, 1000.0}, "mm");
   s.offset_y_dw_mm = t.number("offset_y_dw_mm", s.offset_y_dw_mm, {-1000.0, 1000.0}, "mm");

@@ -42,7 +42,7 @@ Status SensorOptions::validate() const {
                "a value in (0, 3600] s")
       .require(within(resolution, 0.0, 100.0), "resolution", resolution, "a value in [0, 100]")
       .require(within(noise_std, 0.0, 100.0), "noise_std", noise_std, "a value in [0, 100]")
-      .require(within(delay, 0.0, 600.0), "delay", delay, "a value in [0, 600] s")
+      .require(within(delay, -600.0, 600.0), "delay", delay, "a value in [-600, 600] s")
       .require(within(offset, -1000.0, 1000.0), "offset", offset, "a value in [-1000, 1000]")
       .require(std::isfinite(start_time), "start_time", start_time, "a finite value in s")
       .status();
@@ -93,12 +93,20 @@ void Sensor::observe(double t, double true_value) {
   history_.emplace_back(t, true_value);
 
   const double h = options_.sample_period;
-  while (sample_instant(times_.size()) <= t + instant_slack * h) {
+  // A sample is emitted once its instant and the instant it reads (earlier with a delay, later
+  // with a negative one) have both been observed.
+  const double lead = std::max(0.0, -options_.delay);
+  while (sample_instant(times_.size()) + lead <= t + instant_slack * h) {
     emit(interpolate_history(sample_instant(times_.size()) - options_.delay));
   }
   // Forget observations older than the one before the next delayed instant.
   const double next_needed = sample_instant(times_.size()) - options_.delay;
   while (history_.size() >= 2 && history_[1].first <= next_needed) history_.pop_front();
+}
+
+void Sensor::finish(std::size_t count) {
+  if (history_.empty()) return;
+  while (times_.size() < count) emit(interpolate_history(sample_instant(times_.size()) - options_.delay));
 }
 
 void Sensor::sample(const std::function<double(double)>& signal, std::size_t count) {

@@ -4,7 +4,8 @@
 //
 //   y_meas(k h) = Q_r( y(k h - d) + offset + n_k ),    n_k ~ N(0, sigma^2) i.i.d.,
 //
-// with a pure delay d, a constant offset, Gaussian noise (std::mt19937_64 seeded, so a run is
+// with a pure delay d (negative: the readings lead, as when the level logger's clock runs ahead
+// of the command's — a time offset of either sign between the two), a constant offset, Gaussian noise (std::mt19937_64 seeded, so a run is
 // reproducible), and the quantisation of the paper's eq. (17),
 //
 //   Q_r(y) = r nint(y / r),   r = 0.05 mm for the ultrasonic level sensors,
@@ -44,7 +45,7 @@ struct SensorOptions {
   double sample_period = 0.13;  // h [s], range (0, 3600]
   double resolution = 0.05e-3;  // r of eq. (17), range [0, 100]; 0 = no quantisation
   double noise_std = 0.0;       // sigma, range [0, 100]
-  double delay = 0.0;           // d [s], range [0, 600]
+  double delay = 0.0;           // d [s], range [-600, 600]; negative: the readings lead
   double offset = 0.0;          // added bias, range [-1000, 1000]
   double start_time = 0.0;      // time of the first sample [s], finite
   std::uint64_t seed = 1;       // noise generator seed
@@ -65,10 +66,16 @@ class Sensor {
   explicit Sensor(const SensorOptions& options);
 
   // Feeds the true value at time t (t must not decrease; a repeated t replaces the value).
-  // Emits every sample whose instant start + k h is at or before t. Samples whose delayed
-  // instant precedes the first observation take the first observed value (the experiment
-  // starts from a steady state). Throws std::invalid_argument when t decreases.
+  // Emits every sample whose instant start + k h and whose read instant start + k h - d are at
+  // or before t. Samples whose read instant precedes the first observation take the first
+  // observed value (the experiment starts from a steady state). Throws std::invalid_argument
+  // when t decreases.
   void observe(double t, double true_value);
+
+  // Emits the samples still owed up to `count` in all: with a negative delay the last ones read
+  // past the last observation, and take its value (the run ends there; the calibration's
+  // replay clamps at the end the same way).
+  void finish(std::size_t count);
 
   // Samples `count` instants start + k h of a function defined for all t, evaluating it at
   // start + k h - d directly.

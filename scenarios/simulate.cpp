@@ -569,6 +569,9 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
       report(initial.progress_weight + (1.0 - initial.progress_weight) * t / e.duration_s);
     }
   }
+  // Level sensors whose readings lead the command (a negative delay) still owe the last samples.
+  for (Sensor* sensor : {&y_dwe, &y_dw, &y_up}) sensor->finish(samples);
+  for (Sensor& sensor : y_check) sensor.finish(samples);
   report(1.0);
   if (options.on_finish) options.on_finish(b);
 

@@ -74,6 +74,35 @@ TEST(Sensor, DelayShiftsByTheExactNumberOfSamples) {
   }
 }
 
+// A negative delay (the level logger's clock ahead of the command's): sample k reads the signal
+// `lead` periods later, emitted once that instant has been observed; finish() owes the last ones,
+// which read past the run's end and take its last value.
+TEST(Sensor, ANegativeDelayLeadsByTheExactNumberOfSamples) {
+  const auto f = [](double t) { return 0.05 + 0.01 * std::sin(0.7 * t) + 0.001 * t; };
+  for (int lead : {1, 3, 38}) {
+    SensorOptions leading_options = ideal();
+    leading_options.delay = -lead * 0.13;
+    Sensor plain(ideal()), leading(leading_options);
+    double last_t = 0.0;
+    for (double t = 0.0; t < 30.0; t += 0.0117) {
+      plain.observe(t, f(t));
+      leading.observe(t, f(t));
+      last_t = t;
+      // Nothing is emitted before the instant it reads has been observed.
+      if (!leading.times().empty()) EXPECT_LE(leading.times().back() + lead * 0.13, t + 1e-9);
+    }
+    const std::size_t n = plain.values().size();
+    ASSERT_EQ(leading.values().size() + static_cast<std::size_t>(lead), n) << lead;
+    leading.finish(n);
+    ASSERT_EQ(leading.values().size(), n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double expected = k + lead < n ? plain.values()[k + lead] : f(last_t);
+      EXPECT_NEAR(leading.values()[k], expected, 1e-14) << lead << ' ' << k;
+      EXPECT_NEAR(leading.times()[k], plain.times()[k], 1e-12);
+    }
+  }
+}
+
 TEST(Sensor, DelayWithQuantisationStillShiftsExactly) {
   SensorOptions plain_options;  // 0.05 mm
   SensorOptions delayed_options;
@@ -144,7 +173,7 @@ TEST(SensorOptions, ValidationNamesTheFieldAndRange) {
   EXPECT_EQ(options.validate().message(), "noise_std = -1: expected a value in [0, 100]");
   options = {};
   options.delay = 700.0;
-  EXPECT_EQ(options.validate().message(), "delay = 700: expected a value in [0, 600] s");
+  EXPECT_EQ(options.validate().message(), "delay = 700: expected a value in [-600, 600] s");
   EXPECT_THROW(Sensor{options}, std::invalid_argument);
 }
 

@@ -45,6 +45,30 @@ TEST(Simulate, LabRecordingHasThePaperFormatAndResolution) {
   }
 }
 
+// A negative sensor delay (levels that lead the command, scenario key sensors.delay_s): every
+// level column is the undelayed one two samples on, the command and discharge unchanged, and the
+// last two samples hold the run's last level.
+TEST(Simulate, LevelsThatLeadTheCommandAreTheSameRunSamplesEarlier) {
+  Scenario lab = builtin_scenario("lab");
+  const Recording plain = simulate(lab, lab_experiment(25.0, 30.0));
+  lab.sensors.delay_s = -2 * 0.13;
+  const Recording leading = simulate(lab, lab_experiment(25.0, 30.0));
+  ASSERT_EQ(leading.size(), plain.size());
+  EXPECT_EQ(leading.column("u_mm"), plain.column("u_mm"));
+  EXPECT_EQ(leading.column("q_lps"), plain.column("q_lps"));
+  const std::size_t n = plain.size();
+  for (const char* c : {"y_up_mm", "y_dw_mm", "y_dwe_mm"}) {
+    const auto& a = leading.column(c);
+    const auto& b = plain.column(c);
+    for (std::size_t k = 0; k + 2 < n; ++k) EXPECT_NEAR(a[k], b[k + 2], 1e-9) << c << " sample " << k;
+    EXPECT_NEAR(a[n - 2], b[n - 1], 1e-9) << c;
+    EXPECT_NEAR(a[n - 1], b[n - 1], 1e-9) << c;
+  }
+  // The PRBS moves the levels: the shift is seen.
+  const auto& y = plain.column("y_dw_mm");
+  EXPECT_GT(*std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end()), 1.0);
+}
+
 TEST(Simulate, NewtonInitialStateIsTheOneTimeMarchingReaches) {
   // A fixed 60 mm supply: the reservoir's PID would only slow the marching down.
   Scenario lab = builtin_scenario("lab");
