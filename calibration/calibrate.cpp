@@ -8,10 +8,13 @@
 #include <limits>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "calibration/levenberg_marquardt.hpp"
+#include "calibration/time_offset.hpp"
+#include "calibration/warning_once.hpp"
 #include "calibration/problem.hpp"
 #include "calibration/statistics.hpp"
 #include "core/errors.hpp"
@@ -222,39 +225,6 @@ std::vector<std::string> other_canal_problems(const Scenario& s, const std::vect
   }
   return problems;
 }
-
-// Simulation warnings (a failed steady state, scenarios/simulate.hpp) passed on once per
-// recording — to the caller's ReplayOptions::warning, else to stderr — and kept for the result:
-// a calibration simulates every recording hundreds of times, and the same warning each time
-// would bury the terminal. Called from the parallel simulations.
-class WarningOncePerRecording {
- public:
-  explicit WarningOncePerRecording(std::function<void(const std::string&)> sink) : sink_(std::move(sink)) {}
-  void operator()(const std::string& message) {
-    // "<scenario>: experiment <recording>: the steady state (Newton) failed (...)": one per recording.
-    const std::string recording = message.substr(0, message.find(": the "));
-    {
-      const std::lock_guard lock(mutex_);
-      if (!seen_.insert(recording).second) return;
-      kept_.push_back(message);
-    }
-    if (sink_) {
-      sink_(message);
-    } else {
-      std::fprintf(stderr, "canalsim: warning: %s\n", message.c_str());
-    }
-  }
-  std::vector<std::string> kept() {
-    const std::lock_guard lock(mutex_);
-    return kept_;
-  }
-
- private:
-  std::function<void(const std::string&)> sink_;
-  std::mutex mutex_;
-  std::set<std::string> seen_;
-  std::vector<std::string> kept_;
-};
 
 }  // namespace
 
@@ -538,12 +508,14 @@ RefinementFollows follows_round(int k, double coarser_cost, const CalibrateOptio
 
 // `later`, a calibration made after `earlier` (on twice its cells, or on the same grid to complete
 // it), takes over what `earlier` carried: the starts of the parameters, the starts run on the
-// scenario's grid, the gate laws compared, the grids so far, the iterations and warnings.
+// scenario's grid, the gate laws compared, the time offset found, the grids so far, the
+// iterations and warnings.
 void carry_over(Calibration& later, Calibration&& earlier) {
   for (std::size_t j = 0; j < later.parameters.size(); ++j) later.parameters[j].start = earlier.parameters[j].start;
   later.starts = earlier.starts;
   later.starts_note = std::move(earlier.starts_note);
   later.gate_laws = std::move(earlier.gate_laws);
+  later.time_offset_note = std::move(earlier.time_offset_note);
   std::vector<std::vector<int>> grids = std::move(earlier.grids);
   if (grids.empty() || grids.back() != cells_of(later.calibrated)) grids.push_back(cells_of(later.calibrated));
   later.grids = std::move(grids);
@@ -624,6 +596,68 @@ Calibration refine_grid(Calibration c, Handover handover, const Scenario& given,
   return c;
 }
 
+// The scan of time_offset.hpp at the first fit's estimates, when it applies: the parameters do not
+// hold the delay already, no gate laws are compared, the scenario's own delay leaves the scan's
+// ±2 s within the parameter's bounds, and the scan's simulations succeed.
+std::optional<TimeOffsetScan> scan_after_first_fit(Calibration& c, const Scenario& given, const std::vector<Recording>& recordings,
+                                                   const std::vector<std::string>& specs, const CalibrateOptions& o) {
+  const bool named = std::any_of(specs.begin(), specs.end(), [](const std::string& s) { return s.substr(0, s.find(':')) == "sensor_delay_s"; });
+  if (!c.ok || named || !o.gate_laws.empty() || std::abs(given.sensors.delay_s) > 8.0) return std::nullopt;
+  if (o.progress) o.progress({1.0, "scanning a time offset between the command and the levels"});
+  ReplayOptions quiet = replay_for(select_parameters(given, specs), o);  // (the estimates may sit on a bound)
+  quiet.warning = [](const std::string&) {};  // the first fit passed them on
+  try {
+    const TimeOffsetScan scan = scan_time_offset(c.calibrated, recordings, quiet, o.threads);
+    c.simulations += static_cast<int>(recordings.size());
+    return scan;
+  } catch (const std::exception&) {
+    return std::nullopt;  // the first fit's optimum replayed before: not for a delay to decide
+  }
+}
+
+// A time offset between command and levels (time_offset.hpp), looked for after the first fit.
+// Found where the default set is fitted, the calibration runs again from the first fit's
+// estimates with `sensor_delay_s` added (one start; "before" figures and starts those of the
+// scenario as given); where the user named the parameters, the note says what to add.
+Calibration fit_time_offset(Calibration c, const Scenario& given, const std::vector<Recording>& recordings,
+                            const std::vector<Recording>& validation, std::vector<std::string>& specs,
+                            const CalibrateOptions& o, const RefinementFollows& follows, Handover& handover) {
+  const std::optional<TimeOffsetScan> scan = scan_after_first_fit(c, given, recordings, specs, o);
+  if (!scan || !scan->worth_fitting()) return c;
+  const std::string found = "the levels " + std::string(scan->delay_s > 0.0 ? "lag" : "lead") + " the command by about " +
+                            format_g(std::abs(scan->delay_s), 2) + " s (after the first fit a delay of the level sensors of " +
+                            format_g(scan->delay_s, 3) + " s explains " +
+                            format_fixed(100.0 * (1.0 - scan->cost_at_best / scan->cost_at_zero), 0) + " % of the cost left)";
+  const bool default_set = o.parameters.empty() ||
+                           std::all_of(o.parameters.begin(), o.parameters.end(), [](const std::string& p) { return p.rfind('+', 0) == 0; });
+  if (!default_set) {
+    c.time_offset_note = found + "; not fitted: the parameters were named (add sensor_delay_s to fit it)";
+    return c;
+  }
+  specs.push_back("sensor_delay_s");
+  Scenario from = c.calibrated;
+  from.sensors.delay_s = scan->delay_s;
+  CalibrateOptions one = o;
+  one.starts = 1;  // from the first fit's estimates
+  Calibration again = calibrate_with(from, recordings, validation, specs, one, follows, nullptr, &handover);
+  if (!again.ok) {
+    specs.pop_back();
+    c.time_offset_note = found + "; not fitted: the calibration with it failed (" + again.message + ")";
+    return c;
+  }
+  restate_before(again, given, specs, recordings, validation, o);
+  for (std::size_t j = 0; j < c.parameters.size(); ++j) again.parameters[j].start = c.parameters[j].start;
+  again.parameters.back().start = given.sensors.delay_s;
+  again.starts = c.starts;
+  again.starts_note = c.starts_note;
+  again.time_offset_note = found + "; sensor_delay_s fitted with the default set (its estimate in the table)";
+  again.simulations += c.simulations;
+  again.iterations += c.iterations;
+  again.seconds += c.seconds;
+  again.warnings.insert(again.warnings.begin(), c.warnings.begin(), c.warnings.end());
+  return again;
+}
+
 }  // namespace
 
 Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& recordings,
@@ -643,13 +677,13 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     throw InputError("gate laws to compare, but scenario " + scenario.source + " has no sluice gate");
   }
   const bool replayed = o.replay.use_recorded_upstream && recordings.front().has(columns::upstream_level);
-  const std::vector<std::string> specs =
-      chosen_parameters(o.parameters, default_parameters(scenario, recordings, replayed));
+  std::vector<std::string> specs = chosen_parameters(o.parameters, default_parameters(scenario, recordings, replayed));
   select_parameters(scenario, specs);  // bad specs: one line before any work
   const RefinementFollows follows = follows_round(0, 0.0, o);
   Handover handover;  // with gate laws compared, the refined grid simulates its start itself
   Calibration c = o.gate_laws.empty() ? calibrate_with(scenario, recordings, validation, specs, o, follows, nullptr, &handover)
                                       : compare_gate_laws(scenario, recordings, validation, specs, o, follows);
+  c = fit_time_offset(std::move(c), scenario, recordings, validation, specs, o, follows, handover);
   if (o.grid_refinements == 0) return c;
   return refine_grid(std::move(c), std::move(handover), scenario, recordings, validation, specs, o);
 }

@@ -170,6 +170,10 @@ struct Calibration {
   // The "before" figures stay those of the scenario as given.
   std::vector<std::vector<int>> grids;
   std::string grid_note;     // why the refinement stopped (empty when none was asked for)
+  // A time offset between the command and the levels found after the first fit (time_offset.hpp),
+  // and whether it was fitted (with the default set) or not (the parameters named); empty when
+  // none was found.
+  std::string time_offset_note;
   scenarios::Scenario calibrated;
 };
 

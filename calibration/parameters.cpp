@@ -125,7 +125,7 @@ void add_sensors(std::vector<Parameter>& out) {
                        Transform::linear, 0.05, [field](const Scenario& x) { return x.sensors.*field; },
                        [field](Scenario& x, double v) { x.sensors.*field = v; }, true));
   }
-  out.push_back(make("sensor_delay_s", "s", "sensors.delay_s", "delay of the level sensors", 0.0, 10.0, Transform::linear,
+  out.push_back(make("sensor_delay_s", "s", "sensors.delay_s", "delay of the level sensors (negative: they lead the command)", -10.0, 10.0, Transform::linear,
                      0.02, [](const Scenario& x) { return x.sensors.delay_s; },
                      [](Scenario& x, double v) { x.sensors.delay_s = v; }, true));
 }

@@ -99,6 +99,7 @@ std::string text_summary(const Calibration& c) {
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
   if (!c.gate_laws.empty()) out << gate_law_lines(c);
   out << grid_lines(c);
+  if (!c.time_offset_note.empty()) out << "time offset: " << c.time_offset_note << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
   if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
@@ -154,6 +155,7 @@ nlohmann::json to_json(const Calibration& c) {
   }
   j["grids"] = c.grids;
   j["grid_note"] = c.grid_note;
+  j["time_offset_note"] = c.time_offset_note;
   j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;
   j["cost_after"] = c.cost_after;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
 #include "core/errors.hpp"
 #include "scenarios/builtin.hpp"
@@ -46,7 +47,10 @@ Scenario perturbed_truth(int cells_factor = 2) {
   return testing::independent_truth(six_perturbed(), v);
 }
 
-std::vector<Recording> record(const Scenario& truth, const std::vector<std::string>& experiments, double seconds) {
+// `time_offset_s`: the level columns are those of t + time_offset_s (either sign), the command
+// column as it was (testing/realistic.hpp).
+std::vector<Recording> record(const Scenario& truth, const std::vector<std::string>& experiments, double seconds,
+                              double time_offset_s = 0.0) {
   std::vector<Recording> out;
   std::uint64_t seed = 11;
   for (const auto& name : experiments) {
@@ -57,6 +61,7 @@ std::vector<Recording> record(const Scenario& truth, const std::vector<std::stri
     sensors.quantum_mm = 0.05;         // the lab's resolution (eq. 17) ...
     sensors.quantum_offset_mm = 0.02;  // ... on a lattice that does not pass through zero
     sensors.seed = seed++;
+    sensors.time_offset_s = time_offset_s;
     Recording r = testing::realistic_levels(scenarios::simulate(truth, e), sensors);
     r.source = name;
     out.push_back(std::move(r));
@@ -110,6 +115,56 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
     EXPECT_LT(std::abs(on_twice_the_cells - want), 0.6 * std::abs(p.value - want)) << on_twice_the_cells;
   }
   EXPECT_LT(c.cost_after, 0.05 * c.cost_before);
+  // Command and levels share one clock here: no time offset is found (the scan's best delay,
+  // 0.014 s, explains 8 % of the cost left: the grid's dispersion; docs/calibration.md).
+  EXPECT_TRUE(c.time_offset_note.empty()) << c.time_offset_note;
+}
+
+// A time offset between the command and the levels, of either sign: the same truth and sensors,
+// the level columns those of t + 0.3 s (they lead the command) or t − 0.3 s (they lag it). The
+// default set alone cannot follow it (measured: cost 0.93 / 0.98 against 0.038, Cd free 0.60 /
+// 0.39 for 0.9); the scan after the first fit finds it and the default set is fitted with
+// sensor_delay_s. Measured: delay −0.291 ± 0.037 s and +0.321 ± 0.030 s; roughness, opening
+// and offsets within 1.1 %, 0.2 % and 5.2 %; the discharge-coefficient pair within 1 std (Cd free
+// −2.8 % / −7.1 %, Cd submerged +2.4 % / +7.0 %: the valley of docs/calibration.md). With the
+// parameters named, the offset is not fitted but the note says what to add.
+TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
+  const Scenario truth = perturbed_truth();
+  const std::map<std::string, double> expected = {
+      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
+      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
+      {"offset_y_dwe_mm", -1.5}};
+  for (const double lead : {0.3, -0.3}) {
+    const std::vector<Recording> recordings = record(truth, {"op1", "op2", "op3", "op4"}, 80.0, lead);
+    const Calibration c = calibrate(model(), recordings, {}, CalibrateOptions{});
+    ASSERT_TRUE(c.ok) << c.message;
+    EXPECT_NE(c.time_offset_note.find(lead > 0.0 ? "lead the command" : "lag the command"), std::string::npos)
+        << c.time_offset_note;
+    ASSERT_EQ(c.parameters.back().name, "sensor_delay_s");
+    for (const ParameterEstimate& p : c.parameters) {
+      const double want = p.name == "sensor_delay_s" ? -lead : expected.at(p.name);
+      EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << lead << " " << p.name << " = " << p.value << " ± " << p.std;
+      if (p.name == "sensor_delay_s") {
+        EXPECT_NEAR(p.value, want, 0.03) << lead;
+        EXPECT_LT(p.std, 0.05) << lead;
+      } else if (p.name == "manning_n" || p.name == "downstream_opening_mm") {
+        EXPECT_LE(relative_error(p, want), 0.05) << lead << " " << p.name << " = " << p.value;
+      } else if (p.name.rfind("offset_", 0) == 0) {
+        EXPECT_LE(relative_error(p, want), 0.10) << lead << " " << p.name << " = " << p.value;
+      }
+    }
+    EXPECT_LT(c.cost_after, 0.04) << lead;  // the clean-timing fit's 0.038, not 0.93
+  }
+  CalibrateOptions named;
+  named.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  named.max_iterations = 5;
+  const Calibration c = calibrate(model(), record(truth, {"op1", "op4"}, 80.0, -0.3), {}, named);
+  ASSERT_TRUE(c.ok) << c.message;
+  EXPECT_EQ(c.parameters.size(), named.parameters.size());
+  const std::string lag = "the levels lag the command by about ";
+  ASSERT_EQ(c.time_offset_note.rfind(lag, 0), 0u) << c.time_offset_note;
+  EXPECT_NEAR(std::stod(c.time_offset_note.substr(lag.size())), 0.3, 0.05) << c.time_offset_note;
+  EXPECT_NE(c.time_offset_note.find("not fitted"), std::string::npos) << c.time_offset_note;
 }
 
 // The grid-converged estimate on another truth: 400 cells. The model's own offset of y_dwe is
