@@ -89,7 +89,9 @@ TEST(Sensor, ANegativeDelayLeadsByTheExactNumberOfSamples) {
       leading.observe(t, f(t));
       last_t = t;
       // Nothing is emitted before the instant it reads has been observed.
-      if (!leading.times().empty()) EXPECT_LE(leading.times().back() + lead * 0.13, t + 1e-9);
+      if (!leading.times().empty()) {
+        EXPECT_LE(leading.times().back() + lead * 0.13, t + 1e-9);
+      }
     }
     const std::size_t n = plain.values().size();
     ASSERT_EQ(leading.values().size() + static_cast<std::size_t>(lead), n) << lead;
