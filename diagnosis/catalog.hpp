@@ -4,7 +4,7 @@
 //   effect                 parameter (unit)            what changes
 //   gate_rate_limit        speed (mm/s)                head_gate.actuator_speed_m_s (paper eq. 16)
 //   sensor_quantization    resolution (mm)             sensors.resolution_mm (paper eq. 17)
-//   sensor_delay           delay (s)                   sensors.delay_s, added
+//   sensor_delay           delay (s; negative: lead)   sensors.delay_s, added
 //   sensor_offset          offset (mm)                 sensors.offset_mm, added
 //   gate_leakage           extra opening (mm)          head_gate.leakage_m, added
 //   discharge_coefficient  multiplier (-)              head_gate.discharge_coefficient, times

@@ -206,17 +206,20 @@ Point Engine::fit_sensor_offset() {
   return evaluate(Effect::sensor_offset, d.empty() ? 0.0 : d[d.size() / 2]);
 }
 
-// A delay re-observes the nominal simulation (no re-simulation): a 0.02 s grid, then the vertex
-// of the parabola through the best grid point and its neighbours.
+// A delay re-observes the nominal simulation (no re-simulation): a 0.02 s grid over both signs
+// (a negative delay is levels that lead the command: two loggers' clocks), then the vertex of the
+// parabola through the best grid point and its neighbours.
 Point Engine::fit_sensor_delay() {
   const EffectInfo& e = info(Effect::sensor_delay);
   Point best = nominal_point_;
   best.theta = 0.0;
-  for (double th = 0.02; th <= e.theta_high + 1e-9; th += 0.02) {
-    Point p = evaluate(Effect::sensor_delay, th);
+  const int first = static_cast<int>(std::round(e.theta_low / 0.02)), last = static_cast<int>(std::round(e.theta_high / 0.02));
+  for (int k = first; k <= last; ++k) {
+    if (k == 0) continue;  // the nominal point
+    Point p = evaluate(Effect::sensor_delay, 0.02 * k);
     if (p.cost < best.cost) best = std::move(p);
   }
-  if (best.theta > 0.0 && best.theta < e.theta_high) {
+  if (best.theta != 0.0 && best.theta > e.theta_low && best.theta < e.theta_high) {
     const double a = evaluate(Effect::sensor_delay, best.theta - 0.02).cost;
     const double c = evaluate(Effect::sensor_delay, best.theta + 0.02).cost;
     const double den = a - 2.0 * best.cost + c;

@@ -95,6 +95,8 @@ TEST(Diagnose, CleanRecordingsGiveNone) {
 
 TEST(Diagnose, RecoversSensorOffset) { expect_recovered({"sensor_offset", 1.5, {"downstream_gate"}}); }
 TEST(Diagnose, RecoversSensorDelay) { expect_recovered({"sensor_delay", 1.0, {"gate_rate_limit"}}); }
+// Levels that lead the command (loggers on two clocks): a negative delay.
+TEST(Diagnose, RecoversLevelsThatLeadTheCommand) { expect_recovered({"sensor_delay", -0.5, {"gate_rate_limit", "friction"}}); }
 TEST(Diagnose, RecoversSensorQuantization) { expect_recovered({"sensor_quantization", 0.5, {"sensor_offset"}}); }
 TEST(Diagnose, RecoversGateRateLimit) { expect_recovered({"gate_rate_limit", 8.0, {"sensor_delay"}}); }
 TEST(Diagnose, RecoversGateLeakage) { expect_recovered({"gate_leakage", 2.0, {"discharge_coefficient"}}); }
