@@ -40,6 +40,6 @@ struct TimeOffsetScan {
 // scenario's own, in steps of `step_s`, the best refined to 1 ms by golden-section search: one
 // simulation per recording in all.
 TimeOffsetScan scan_time_offset(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
-                                const ReplayOptions& replay, int threads, double range_s = 2.0, double step_s = 0.02);
+                                const ReplayOptions& replay, int threads, double range_s = 2.0, double step_s = 0.05);
 
 }  // namespace canalsim::calibration
