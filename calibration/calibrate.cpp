@@ -639,12 +639,14 @@ Calibration fit_time_offset(Calibration c, const Scenario& given, const std::vec
   from.sensors.delay_s = scan->delay_s;
   CalibrateOptions one = o;
   one.starts = 1;  // from the first fit's estimates
-  Calibration again = calibrate_with(from, recordings, validation, specs, one, follows, nullptr, &handover);
+  Handover to_finer;  // replaces the first fit's only if this one succeeds
+  Calibration again = calibrate_with(from, recordings, validation, specs, one, follows, nullptr, &to_finer);
   if (!again.ok) {
     specs.pop_back();
     c.time_offset_note = found + "; not fitted: the calibration with it failed (" + again.message + ")";
     return c;
   }
+  handover = std::move(to_finer);
   restate_before(again, given, specs, recordings, validation, o);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) again.parameters[j].start = c.parameters[j].start;
   again.parameters.back().start = given.sensors.delay_s;
