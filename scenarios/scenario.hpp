@@ -158,7 +158,8 @@ struct ExperimentSpec {
 struct NumericsSpec {
   double cfl = 0.8;
   int order = 2;                    // 1 or 2
-  bool van_leer_limiter = true;     // else generalised minmod with θ = 1 (docs/numerics.md)
+  bool van_leer_limiter = true;     // else generalised minmod with θ = limiter_theta (docs/numerics.md)
+  double limiter_theta = 1.0;       // 1 = minmod, 2 = monotonised central (not used by van Leer's)
   double dry_depth_m = 1e-6;
   double steady_tolerance_m = 1e-10;  // steady state (Newton) convergence on depths
 };

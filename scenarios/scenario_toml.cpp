@@ -277,6 +277,7 @@ Scenario read_scenario(TomlTable root, const std::string& source) {
     s.numerics.order = n.integer("order", s.numerics.order, 1, 2);
     s.numerics.van_leer_limiter =
         n.choice("limiter", s.numerics.van_leer_limiter ? "van_leer" : "minmod", {"van_leer", "minmod"}) == "van_leer";
+    s.numerics.limiter_theta = n.number("limiter_theta", s.numerics.limiter_theta, {1.0, 2.0}, "(1 = minmod, 2 = monotonised central)");
     s.numerics.dry_depth_m = n.number("dry_depth_m", s.numerics.dry_depth_m, {0.0, 1.0, true}, "m");
     s.numerics.steady_tolerance_m = n.number("steady_tolerance_m", s.numerics.steady_tolerance_m, {0.0, 1.0, true}, "m");
     n.reject_unknown_keys();

@@ -31,6 +31,7 @@ solver::SolverOptions solver_options(const NumericsSpec& n) {
   solver::SolverOptions o;
   o.cfl = n.cfl;
   o.limiter = n.van_leer_limiter ? solver::Limiter::van_leer : solver::Limiter::generalised_minmod;
+  o.limiter_theta = n.limiter_theta;
   o.order = n.order == 1 ? solver::SpatialOrder::first : solver::SpatialOrder::second;
   o.dry_depth = std::min(n.dry_depth_m, 0.01);
   return o;
