@@ -12,9 +12,11 @@
 #include <set>
 #include <sstream>
 
+#include "calibration/fits.hpp"
 #include "calibration/levenberg_marquardt.hpp"
 #include "calibration/time_offset.hpp"
 #include "calibration/warning_once.hpp"
+#include "calibration/written_model.hpp"
 #include "calibration/problem.hpp"
 #include "calibration/statistics.hpp"
 #include "core/errors.hpp"
@@ -25,10 +27,6 @@ namespace canalsim::calibration {
 namespace {
 
 using scenarios::Scenario;
-
-double cost_per_sample(const std::vector<double>& r) {
-  return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
-}
 
 // A weighted cost per sample above this leaves more than a fifth of the channels' spread
 // unexplained (residual RMS > 22 % of it): a fit that may sit in the wrong basin. Measured fits of
@@ -131,36 +129,6 @@ std::vector<Run> screened_starts(ReplayProblem& problem, int count) {
   }
   std::sort(out.begin(), out.end(), [](const Run& a, const Run& b) { return a.cost < b.cost; });
   return out;
-}
-
-double nrmse_percent(const std::vector<double>& data, const std::vector<double>& model) {
-  const double mean = std::accumulate(data.begin(), data.end(), 0.0) / static_cast<double>(std::max<std::size_t>(data.size(), 1));
-  double e = 0.0, v = 0.0;
-  for (std::size_t k = 0; k < data.size(); ++k) {
-    e += (data[k] - model[k]) * (data[k] - model[k]);
-    v += (data[k] - mean) * (data[k] - mean);
-  }
-  return v > 0.0 ? 100.0 * (1.0 - std::sqrt(e / v)) : 0.0;
-}
-
-double rms(const std::vector<double>& a, const std::vector<double>& b) {
-  double s = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
-  return a.empty() ? 0.0 : std::sqrt(s / static_cast<double>(a.size()));
-}
-
-void add_fits(const ReplayProblem& problem, const std::vector<Channels>& before, const std::vector<Channels>& after,
-              bool validation, Calibration& c) {
-  for (std::size_t i = 0; i < problem.replays().size(); ++i) {
-    const Replay& r = problem.replays()[i];
-    for (const auto& [channel, y] : r.data) {
-      if (!before[i].count(channel) || !after[i].count(channel) || !problem.weights().weight.count(channel)) continue;
-      const auto& b = before[i].at(channel);
-      const auto& a = after[i].at(channel);
-      c.fits.push_back({r.name, channel, validation, rms(y, b), rms(y, a), nrmse_percent(y, b), nrmse_percent(y, a)});
-      c.series.push_back({r.name, channel, validation, r.t, y, b, a});
-    }
-  }
 }
 
 // The optimum re-simulated on a grid with `factor` times the cells of every pool (`fine`, the
@@ -407,19 +375,7 @@ void restate_before(Calibration& c, const Scenario& given, const std::vector<std
   const ReplayOptions replay = replay_for(parameters, o);
   const auto restate = [&c](ReplayProblem& problem, bool validation_set) {
     const std::vector<Channels> nominal = problem.predict(problem.start());
-    for (std::size_t i = 0; i < problem.replays().size(); ++i) {
-      const Replay& r = problem.replays()[i];
-      for (ChannelFit& f : c.fits) {
-        if (f.recording != r.name || f.validation != validation_set || !nominal[i].count(f.channel)) continue;
-        f.rms_before = rms(r.data.at(f.channel), nominal[i].at(f.channel));
-        f.nrmse_before = nrmse_percent(r.data.at(f.channel), nominal[i].at(f.channel));
-      }
-      for (Series& series : c.series) {
-        if (series.recording == r.name && series.validation == validation_set && nominal[i].count(series.channel)) {
-          series.nominal = nominal[i].at(series.channel);
-        }
-      }
-    }
+    restate_fits(problem, nominal, validation_set, FitSide::before, c);
     c.simulations += problem.simulations();
     return nominal;
   };
@@ -686,8 +642,14 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
   Calibration c = o.gate_laws.empty() ? calibrate_with(scenario, recordings, validation, specs, o, follows, nullptr, &handover)
                                       : compare_gate_laws(scenario, recordings, validation, specs, o, follows);
   c = fit_time_offset(std::move(c), scenario, recordings, validation, specs, o, follows, handover);
-  if (o.grid_refinements == 0) return c;
-  return refine_grid(std::move(c), std::move(handover), scenario, recordings, validation, specs, o);
+  if (o.grid_refinements > 0) c = refine_grid(std::move(c), std::move(handover), scenario, recordings, validation, specs, o);
+  if (o.write_grid_converged && c.ok && c.grid.done) {
+    std::vector<std::string> fitted;  // the time offset's refit may have added sensor_delay_s
+    for (const auto& p : c.parameters) fitted.push_back(p.name + ":" + format_g(p.low, 17) + ":" + format_g(p.high, 17));
+    const std::vector<Parameter> parameters = select_parameters(c.calibrated, fitted);
+    write_grid_converged(c, parameters, recordings, validation, replay_for(parameters, o), o.threads);
+  }
+  return c;
 }
 
 }  // namespace canalsim::calibration

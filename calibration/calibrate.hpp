@@ -69,6 +69,11 @@ struct CalibrateOptions {
   // doubling costs about 2.6 times the simulations' time (lab: 100 -> 200 cells). 0 (the
   // library's default): the scenario's grid; `canalsim calibrate` refines twice at most.
   int grid_refinements = 0;
+  // The model written (written_model.hpp): with the grid check, when the grid-converged estimates
+  // on twice the last grid's cells fit the recordings better than the estimates, calibrated holds
+  // them (and that grid). false (the library's default): the estimates on the last grid;
+  // `canalsim calibrate` turns it on.
+  bool write_grid_converged = false;
   ProgressCallback progress;
   [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
   static ReplayOptions default_replay();
@@ -174,6 +179,12 @@ struct Calibration {
   // and whether it was fitted (with the default set) or not (the parameters named); empty when
   // none was found.
   std::string time_offset_note;
+  // What `calibrated` holds (CalibrateOptions::write_grid_converged): the estimates on the last
+  // grid, or the grid-converged estimates on twice its cells when they fit better; then the
+  // "after" figures are those of that model. The note says which and the costs compared; empty
+  // when no choice was made.
+  bool written_grid_converged = false;
+  std::string written_note;
   scenarios::Scenario calibrated;
 };
 

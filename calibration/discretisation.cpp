@@ -40,10 +40,6 @@ std::vector<double> clamp_to_bounds(const std::vector<Parameter>& parameters, st
   return z;
 }
 
-double cost_per_sample(const std::vector<double>& r) {
-  return r.empty() ? 0.0 : std::inner_product(r.begin(), r.end(), r.begin(), 0.0) / static_cast<double>(r.size());
-}
-
 // θ(to) − θ(from) per parameter, in parameter units.
 std::vector<double> parameter_move(const std::vector<Parameter>& parameters, const std::vector<double>& from,
                          const std::vector<double>& to) {

@@ -1,6 +1,7 @@
 #include "calibration/problem.hpp"
 
 #include <cmath>
+#include <numeric>
 
 #include "core/parallel.hpp"
 
@@ -218,6 +219,12 @@ void ReplayProblem::broyden_update(const std::vector<double>& z, const std::vect
       if (hydraulic_[j]) row[j] = last[j] + unexplained * dz[j] / hydraulic_step_squared;
     }
   }
+}
+
+double cost_per_sample(const std::vector<double>& residuals) {
+  return residuals.empty() ? 0.0
+                           : std::inner_product(residuals.begin(), residuals.end(), residuals.begin(), 0.0) /
+                                 static_cast<double>(residuals.size());
 }
 
 }  // namespace canalsim::calibration

@@ -97,4 +97,8 @@ class ReplayProblem {
   bool secant_ = false, refresh_ = false;
 };
 
+// The weighted cost per sample of residuals(): their mean square (1 when every channel misses by
+// its noise).
+double cost_per_sample(const std::vector<double>& residuals);
+
 }  // namespace canalsim::calibration

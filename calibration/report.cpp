@@ -68,7 +68,8 @@ std::string text_summary(const Calibration& c) {
     out << "(numerics: the part of the std that is how far the estimates move on other numerics — twice the\n"
            " cells (counted twice, Richardson), the other limiter, half the Courant number; converged: the\n"
            " estimate extrapolated to a grid without discretisation error, for a measured value or a model on\n"
-           " another grid — the scenario written keeps the estimate, the best for this model's grid)\n";
+           " another grid; the scenario written holds the estimates, or the converged values on twice the\n"
+           " cells when they fit better: \"model written\" below)\n";
   }
   if (!c.identifiability.empty()) {
     out << "\nnot identifiable from these recordings:\n";
@@ -100,6 +101,7 @@ std::string text_summary(const Calibration& c) {
   if (!c.gate_laws.empty()) out << gate_law_lines(c);
   out << grid_lines(c);
   if (!c.time_offset_note.empty()) out << "time offset: " << c.time_offset_note << "\n";
+  if (!c.written_note.empty()) out << "model written: " << c.written_note << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
   if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
@@ -156,6 +158,8 @@ nlohmann::json to_json(const Calibration& c) {
   j["grids"] = c.grids;
   j["grid_note"] = c.grid_note;
   j["time_offset_note"] = c.time_offset_note;
+  j["written_grid_converged"] = c.written_grid_converged;
+  j["written_note"] = c.written_note;
   j["warnings"] = c.warnings;
   j["cost_before"] = c.cost_before;
   j["cost_after"] = c.cost_after;

@@ -178,6 +178,7 @@ std::string html_report(const Calibration& c, const std::string& title) {
   if (!c.gate_laws.empty()) h << "<h3>Gate laws</h3><pre>" << html::escape(gate_law_lines(c)) << "</pre>";
   if (!c.grids.empty()) h << "<h3>Grid</h3><pre>" << html::escape(grid_lines(c)) << "</pre>";
   if (!c.time_offset_note.empty()) h << "<h3>Time offset</h3><p>" << html::escape(c.time_offset_note) << "</p>";
+  if (!c.written_note.empty()) h << "<h3>Model written</h3><p>" << html::escape(c.written_note) << "</p>";
   h << "<h2>Responses and residuals</h2>";
   for (const auto& s : c.series) {
     if (s.channel != "y_dwe_mm" && s.channel != "y_dw_mm") continue;

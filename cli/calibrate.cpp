@@ -34,6 +34,7 @@ struct CalibrateArguments {
   int threads = 2;
   int starts = 2;
   int grid_refinements = 2;
+  bool keep_grid = false;
   std::string replay = "diagnosis";
 };
 
@@ -71,15 +72,23 @@ std::string compared_laws(const calibration::Calibration& c) {
   return text;
 }
 
+// The value the calibrated scenario holds for `p` (Calibration::written_grid_converged).
+double written_value(const calibration::Calibration& c, const calibration::ParameterEstimate& p) {
+  return c.written_grid_converged ? p.converged : p.value;
+}
+
 // The calibrated scenario file: the input text with every parameter's key replaced. Parsed back
 // and compared with the calibration, so a file that would not read back is never written.
 std::string calibrated_toml(const std::string& text, const calibration::Calibration& c, const CalibrateArguments& args) {
   std::vector<calibration::KeyEdit> edits;
   for (const auto& p : c.parameters) {
     const std::string spread = std::isfinite(p.std) ? "± " + format_g(p.std, 2) : "std not determined";
-    // The key holds the value for this model's grid; the grid-converged estimate is for reference.
-    const std::string converged = c.grid.done ? "; grid-converged " + format_g(p.converged, 6) : "";
-    edits.push_back({p.key, p.value * p.key_scale,
+    // The key holds the value for the model written: the estimate for the grid calibrated on, or
+    // the grid-converged estimate on twice its cells (Calibration::written_grid_converged).
+    const std::string converged = !c.grid.done                ? ""
+                                  : c.written_grid_converged ? "; written: its grid-converged value " + format_g(p.converged, 6)
+                                                              : "; grid-converged " + format_g(p.converged, 6);
+    edits.push_back({p.key, written_value(c, p) * p.key_scale,
                      "calibrated: " + p.name + " = " + format_g(p.value, 6) + " " + spread + " " + p.unit + " (was " +
                          format_g(p.start, 6) + converged + ")",
                      ""});
@@ -90,10 +99,13 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
                        "\"" + std::string(scenarios::to_string(law)) + "\""});
     }
   }
-  for (std::size_t i = 0; c.grids.size() > 1 && i < c.calibrated.pools.size(); ++i) {
-    edits.push_back({"pools[" + std::to_string(i + 1) + "].cells", 0.0,
-                     "calibrated on this grid (was " + std::to_string(c.grids.front()[i]) + "): " + c.grid_note,
-                     std::to_string(c.calibrated.pools[i].cells)});
+  for (std::size_t i = 0; (c.grids.size() > 1 || c.written_grid_converged) && i < c.calibrated.pools.size(); ++i) {
+    const std::string was = std::to_string(c.grids.empty() ? c.calibrated.pools[i].cells : c.grids.front()[i]);
+    const std::string note = c.written_grid_converged
+                                 ? "twice the cells of the last grid calibrated on (was " + was + "; " + c.grid_note +
+                                       "), with the grid-converged estimates"
+                                 : "calibrated on this grid (was " + was + "): " + c.grid_note;
+    edits.push_back({"pools[" + std::to_string(i + 1) + "].cells", 0.0, note, std::to_string(c.calibrated.pools[i].cells)});
   }
   std::string recordings;
   for (const auto& r : args.recordings) recordings += " " + std::filesystem::path(r).filename().string();
@@ -107,9 +119,10 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
     const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +
                                                                ":" + format_g(c.parameters[j].high, 17)});
     const double read = catalog.front().get(back);
-    if (std::abs(read - c.parameters[j].value) > 1e-8 * std::max(1.0, std::abs(read))) {
+    const double expected = written_value(c, c.parameters[j]);
+    if (std::abs(read - expected) > 1e-8 * std::max(1.0, std::abs(read))) {
       throw std::runtime_error("calibrated scenario: " + c.parameters[j].key + " reads back as " + format_g(read) +
-                               ", expected " + format_g(c.parameters[j].value));
+                               ", expected " + format_g(expected));
     }
   }
   if (!c.gate_laws.empty() && gate_law_keys(back) != gate_law_keys(c.calibrated)) throw std::runtime_error("calibrated scenario: the gate laws do not read back");
@@ -141,6 +154,7 @@ int run(const CalibrateArguments& args) {
   options.threads = args.threads;
   options.starts = args.starts;
   options.grid_refinements = args.grid_refinements;
+  options.write_grid_converged = !args.keep_grid;
   for (const auto& law : args.gate_laws) {
     options.gate_laws.push_back(law == "swamee" ? scenarios::GateLaw::swamee : scenarios::GateLaw::simple);
   }
@@ -203,6 +217,9 @@ void add_calibrate_command(CLI::App& app) {
                   "Calibrate again on twice the cells while that lowers the cost by more than a third, at most N times "
                   "(default 2; 0: the scenario's grid; docs/calibration.md)")
       ->check(integer_in(0, 3, "a number of refinements"));
+  cmd->add_flag("--keep-grid", args->keep_grid,
+                "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
+                "its cells fit the recordings better (by default those are written; docs/calibration.md)");
   cmd->add_option("--replay", args->replay,
                   "diagnosis: replay the recordings as `diagnose` does (the upstream model drives the head gate; "
                   "for a scenario diagnosed next); recorded-upstream: drive the head gate with the recorded y_up_mm "

@@ -3,6 +3,7 @@
 // (testing/realistic.hpp independent_truth), six of its parameters perturbed at once, and its
 // levels read by realistic sensors (noise, quantisation on a lattice that misses zero).
 #include "calibration/calibrate.hpp"
+#include "calibration/parameters.hpp"
 
 #include <gtest/gtest.h>
 
@@ -133,7 +134,7 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   const std::map<std::string, double> expected = {
       {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
       {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}};
+      {"offset_y_dwe_mm", -1.5}, {"downstream_zero_head_mm", 0.0}};
   for (const double lead : {0.3, -0.3}) {
     const std::vector<Recording> recordings = record(truth, {"op1", "op2", "op3", "op4"}, 80.0, lead);
     const Calibration c = calibrate(model(), recordings, {}, CalibrateOptions{});
@@ -143,6 +144,12 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
     ASSERT_EQ(c.parameters.back().name, "sensor_delay_s");
     for (const ParameterEstimate& p : c.parameters) {
       const double want = p.name == "sensor_delay_s" ? -lead : expected.at(p.name);
+      if (p.name == "downstream_zero_head_mm") {
+        // In the default set (the downstream gate runs at 4-16 mm of head); the truth's law has
+        // no regularisation, the estimate takes up a little of the grid's error.
+        EXPECT_LT(p.value, 1.0) << lead;
+        continue;
+      }
       EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << lead << " " << p.name << " = " << p.value << " ± " << p.std;
       if (p.name == "sensor_delay_s") {
         EXPECT_NEAR(p.value, want, 0.03) << lead;
@@ -275,6 +282,33 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   // The numerical uncertainty is the last grid's (the first grid left it to the refinement).
   ASSERT_EQ(refined.discretisation.size(), 3u);
   for (const auto& p : refined.parameters) EXPECT_GT(p.grid_shift, 0.0) << p.name;
+  // The grid still limits the 200-cell fit; written as `canalsim calibrate` writes it, the model
+  // holds the grid-converged estimates on 400 cells — the truth's grid — and reproduces the
+  // recording it did not fit better still, with the same estimates and statistics.
+  o.write_grid_converged = true;
+  const Calibration written = calibrate(model(), fitted, other, o);
+  ASSERT_TRUE(written.ok) << written.message;
+  ASSERT_TRUE(written.written_grid_converged) << written.written_note;
+  EXPECT_EQ(written.calibrated.pools.front().cells, 400);
+  ASSERT_EQ(written.parameters.size(), refined.parameters.size());
+  for (std::size_t j = 0; j < written.parameters.size(); ++j) {
+    const ParameterEstimate& p = written.parameters[j];
+    EXPECT_DOUBLE_EQ(p.value, refined.parameters[j].value) << p.name;
+    const Parameter entry = select_parameters(written.calibrated, {p.name + ":" + std::to_string(p.low) + ":" + std::to_string(p.high)}).front();
+    EXPECT_NEAR(entry.get(written.calibrated), p.converged, 1e-12 * std::max(1.0, std::abs(p.converged))) << p.name;
+  }
+  // Chosen by the cost on the fitted recordings (measured 0.0142 against 0.0148); on the recording
+  // not fitted the two level channels together (measured: y_dw 0.192 -> 0.154 mm, y_dwe 0.184 ->
+  // 0.206 mm; the discharge-coefficient pair, ill-determined by two 60 s recordings, moves along
+  // its valley).
+  double written_sq = 0.0, refined_sq = 0.0;
+  for (std::size_t k = 0; k < written.fits.size(); ++k) {
+    const ChannelFit& f = written.fits[k];
+    if (!f.validation || !is_level(f.channel) || f.channel == columns::upstream_level) continue;
+    written_sq += f.rms_after * f.rms_after;
+    refined_sq += refined.fits[k].rms_after * refined.fits[k].rms_after;
+  }
+  EXPECT_LT(written_sq, refined_sq) << written.written_note;
 }
 
 // On recordings the model's own grid made, twice the cells do not lower the cost: no refinement.

@@ -116,7 +116,9 @@ TEST(Calibrate, ComparingGateLawsWritesTheKeptLawAtEveryGate) {
 }
 
 // Recordings of the lab simulated on 400 cells: the lab's 100 cells limit the fit, and the
-// calibration refines the grid once; the written scenario holds the grid it was calibrated on.
+// calibration refines the grid once; the grid still limits it there, so the written scenario
+// holds the grid-converged estimates on twice the last grid's cells — or, with --keep-grid, the
+// estimates on the grid it was calibrated on.
 TEST(Calibrate, ARefinedGridIsWrittenIntoTheCalibratedScenario) {
   const fs::path scratch = scratch_dir("calibrate_grid");
   record_edited_lab(scratch, "fine", [](std::string& fine) {
@@ -130,10 +132,19 @@ TEST(Calibrate, ARefinedGridIsWrittenIntoTheCalibratedScenario) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("grid: 100 -> 200 cells"), std::string::npos) << r.out;
   const std::string toml = read_text(scratch / "cal.toml");
-  EXPECT_NE(toml.find("cells = 200  # calibrated on this grid (was 100)"), std::string::npos) << toml;
+  EXPECT_NE(toml.find("cells = 400  # twice the cells of the last grid calibrated on (was 100;"), std::string::npos) << toml;
+  EXPECT_NE(toml.find("(was 0.012; written: its grid-converged value "), std::string::npos) << toml;
+  EXPECT_NE(r.out.find("model written: the grid-converged estimates on 400 cells"), std::string::npos) << r.out;
   EXPECT_NE(read_text(scratch / "cal.json").find("\"grids\""), std::string::npos);
+  EXPECT_NE(read_text(scratch / "cal.json").find("\"written_grid_converged\": true"), std::string::npos);
   const RunResult again = run_canalsim("simulate cal.toml -e op1 -o again.csv", scratch);
   EXPECT_EQ(again.code, 0) << again.err;
+  const RunResult kept = run_canalsim("calibrate --scenario lab op1.csv -o kept.toml --params manning_n,offset_y_dwe_mm "
+                                      "--starts 1 --grid-refinements 1 --keep-grid",
+                                      scratch);
+  ASSERT_EQ(kept.code, 0) << kept.err;
+  EXPECT_NE(read_text(scratch / "kept.toml").find("cells = 200  # calibrated on this grid (was 100)"), std::string::npos);
+  EXPECT_EQ(kept.out.find("model written: "), std::string::npos) << kept.out;
   const RunResult bad = run_canalsim("calibrate --scenario lab op1.csv -o bad.toml --grid-refinements 4", scratch);
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.err.find("--grid-refinements"), std::string::npos) << bad.err;
