@@ -1,6 +1,8 @@
 #include "calibration/replay.hpp"
 
 #include <algorithm>
+#include <optional>
+#include <tuple>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -248,6 +250,64 @@ ChannelWeights channel_weights(const std::vector<Replay>& replays, const std::ve
   return w;
 }
 
+namespace {
+
+// A clock (period, phase) under which the switches at `changes` (indices of the samples where the
+// command shows a change) fall inside their sample intervals [t[k-1], t[k]] to within a
+// millionth of a sample, and how many of them fall exactly on the sample that shows them, t[k];
+// -1 when it does not.
+int switches_on_sample_instants(const std::vector<double>& t, const std::vector<std::size_t>& changes, double period,
+                                double phase, double h) {
+  const double eps = 1e-6 * h;
+  int exact = 0;
+  for (std::size_t k : changes) {
+    const double s = phase + std::round((0.5 * (t[k - 1] + t[k]) - phase) / period) * period;
+    if (s < t[k - 1] - eps || s > t[k] + eps) return -1;
+    if (std::abs(s - t[k]) <= eps) ++exact;
+  }
+  return exact;
+}
+
+// A clock started with the recording (a tick at its first sample: a simulator, or a logger that
+// starts the PRBS with its sampling) and commensurate with the sampling — the lab's 0.5 s clock
+// and 0.13 s samples meet every 6.5 s — puts a switch exactly on a sample instant wherever a
+// switch and a sample meet. The clock then sits at a corner of the feasible patch (those
+// switches bind it), not at its centre: the centre was 4 ms early on the lab, and the level below
+// the gate, which answers a gate move within a sample, was replayed 0.13 mm RMS off (0.03 mm at
+// the corner; the quantisation's 0.015). Which corner: a command is right-continuous — the sample
+// at a switch instant shows the new value (a PRBS bit floor(t / T); a control loop that logs the
+// command it applies at that tick) — so those switches fall on the sample that shows them, the
+// end t[k] of their interval. (A recorder that logs the command of the interval before would put
+// them on t[k-1] and be replayed 0.01 s late on the lab.) Candidates: the clocks through the
+// first sample and the sample that shows one of the last changes, `period` telling how many
+// periods lie between; the feasible one with the most switches exactly on the sample that shows
+// them is kept when at least three are (chance does not put three switches of an unrelated clock
+// within a millionth of a sample of a sample instant). A clock that did not start with the
+// recording keeps the patch's centre.
+std::optional<std::pair<double, double>> clock_on_sample_instants(const std::vector<double>& t,
+                                                                   const std::vector<std::size_t>& changes, double period) {
+  const double h = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  constexpr std::size_t kLastChanges = 64;
+  const std::size_t n = changes.size();
+  std::optional<std::pair<double, double>> best;
+  int most = 2;
+  for (std::size_t b = n - std::min(n, kLastChanges); b < n; ++b) {
+    const double span = t[changes[b]] - t.front();
+    const double periods = std::round(span / period);
+    if (periods < 1.0) continue;
+    const double p = span / periods;
+    if (std::abs(p - period) > 1e-3 * period) continue;
+    const int exact = switches_on_sample_instants(t, changes, p, t.front(), h);
+    if (exact > most) {
+      most = exact;
+      best = std::make_pair(p, t.front());
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
   std::vector<std::size_t> changes;
   for (std::size_t k = 1; k < u.size(); ++k) {
@@ -299,8 +359,9 @@ std::vector<double> command_switch_times(const std::vector<double>& t, const std
     sum_phase += phase;
     ++count;
   }
-  const double period = sum_period / count, phase = sum_phase / count;
+  double period = sum_period / count, phase = sum_phase / count;
   if (!feasible(period, phase)) return {};
+  if (const auto corner = clock_on_sample_instants(t, changes, period)) std::tie(period, phase) = *corner;
   std::vector<double> out;
   for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
   return out;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "calibration/problem.hpp"
 #include "scenarios/variation.hpp"
@@ -47,6 +48,53 @@ void expect_replay_reproduces(const ReplayOptions& o, double below_gate_mm) {
   // Levels within about one quantisation step (0.05 mm).
   EXPECT_LT(rms_difference(r.data.at(columns::level_downstream_end), seen.at(columns::level_downstream_end)), 0.05);
   EXPECT_LT(rms_difference(r.data.at(columns::level_below_gate), seen.at(columns::level_below_gate)), below_gate_mm);
+}
+
+// A PRBS-like command on a clock of `period` s starting at `phase` s, sampled every 0.13 s
+// (right-continuous: the sample at a switch instant shows the new value).
+void sampled_clocked_command(double period, double phase, std::vector<double>& t, std::vector<double>& u) {
+  std::uint32_t lfsr = 0x1ACEu;
+  std::vector<double> bits;
+  for (int m = 0; m < 600; ++m) {
+    lfsr = (lfsr >> 1) ^ (-(lfsr & 1u) & 0xB400u);  // 16-bit Galois LFSR
+    bits.push_back((lfsr & 1u) ? 20.0 : 10.0);
+  }
+  for (int k = 0; k < 1966; ++k) {
+    t.push_back(0.13 * k);
+    const double m = std::floor((0.13 * k - phase) / period + 1e-12);
+    u.push_back(bits[static_cast<std::size_t>(std::max(0.0, m))]);
+  }
+}
+
+// The lab's 0.5 s clock started with the 0.13 s samples: every 6.5 s a switch falls on a sample
+// instant, and the clock is found exactly — not at the centre of the clocks consistent with the
+// samples, 5 ms early (replayed, the level below the gate was 0.13 mm RMS off for it).
+TEST(Replay, AClockStartedWithTheSamplesIsFoundExactly) {
+  std::vector<double> t, u;
+  sampled_clocked_command(0.5, 0.0, t, u);
+  const std::vector<double> s = command_switch_times(t, u);
+  ASSERT_FALSE(s.empty());
+  int on_samples = 0;
+  for (double x : s) {
+    EXPECT_NEAR(x, 0.5 * std::round(x / 0.5), 1e-9) << x;
+    if (std::abs(x / 0.13 - std::round(x / 0.13)) < 1e-6) ++on_samples;
+  }
+  EXPECT_GT(on_samples, 10);
+}
+
+// A clock that did not start with the samples (phase 0.2371 s), though commensurate with them,
+// is left at the centre of the consistent clocks: not put on sample instants, and within a
+// tenth of a sample of the truth.
+TEST(Replay, AClockUnrelatedToTheSamplesStaysAtTheCentreOfItsPatch) {
+  std::vector<double> t, u;
+  sampled_clocked_command(0.5, 0.2371, t, u);
+  const std::vector<double> s = command_switch_times(t, u);
+  ASSERT_FALSE(s.empty());
+  for (double x : s) {
+    const double truth = 0.2371 + 0.5 * std::round((x - 0.2371) / 0.5);
+    EXPECT_NEAR(x, truth, 0.013) << x;
+    EXPECT_GT(std::abs(x / 0.13 - std::round(x / 0.13)), 1e-6) << x;
+  }
 }
 
 TEST(Replay, ReproducesTheRecordingOfItsOwnScenario) { expect_replay_reproduces(ReplayOptions{}, 0.05); }
