@@ -77,16 +77,22 @@ bool cost_is_the_grids(ReplayProblem& problem, const Run& run) {
 }
 
 // Why the first run's optimum is doubtful, empty when it is not: not converged, a parameter at a
-// bound, a large cost (unless a grid refinement will follow that explains it), a parameter not
+// bound (but the published law's, Parameter::low_is_published), a large cost (unless a grid refinement will follow that explains it), a parameter not
 // determined or barely moving the recordings. Costs no simulation but the grid's: the Jacobian at
 // the run's last point is the one Levenberg–Marquardt took there.
 std::string doubt(ReplayProblem& problem, const Run& run, bool refinable) {
   const auto& params = problem.parameters();
   if (!std::isfinite(run.cost)) return "the first run found no usable solution";
   if (!run.converged) return "the first run did not converge";
+  std::set<std::string> at_the_published_law;  // resting at a low_is_published bound: an answer
   for (std::size_t j = 0; j < params.size(); ++j) {
     const double lo = params[j].to_search(params[j].low), hi = params[j].to_search(params[j].high);
-    if (run.z[j] <= lo + 1e-6 * (hi - lo) || run.z[j] >= hi - 1e-6 * (hi - lo)) return params[j].name + " ended at a bound";
+    const bool at_low = run.z[j] <= lo + 1e-6 * (hi - lo);
+    if (at_low && params[j].low_is_published) {
+      at_the_published_law.insert(params[j].name);
+      continue;
+    }
+    if (at_low || run.z[j] >= hi - 1e-6 * (hi - lo)) return params[j].name + " ended at a bound";
   }
   if (run.cost > kDoubtfulCost && !(refinable && cost_is_the_grids(problem, run))) {
     return "its cost " + format_g(run.cost, 3) + " is above " + format_g(kDoubtfulCost, 2);
@@ -101,6 +107,10 @@ std::string doubt(ReplayProblem& problem, const Run& run, bool refinable) {
     // the same optimum to six digits at twice the simulations. Undetermined parameters and those
     // the recordings barely move are doubtful.
     if (u.reason.rfind("|correlation|", 0) == 0) continue;
+    if (std::all_of(u.parameters.begin(), u.parameters.end(),
+                    [&](const std::string& n) { return at_the_published_law.count(n) > 0; })) {
+      continue;  // a regularisation of 0 has no relative std
+    }
     std::string names;
     for (const auto& n : u.parameters) names += (names.empty() ? "" : ", ") + n;
     return names + " not identifiable (" + u.reason + ")";

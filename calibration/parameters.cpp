@@ -57,6 +57,7 @@ void add_head_gate(const Scenario& s, std::vector<Parameter>& out) {
                      "head below which the head gate's submerged law turns linear in the head (gates/sluice_gate.hpp)",
                      0.0, 20.0, Transform::linear, 0.05, [](const Scenario& x) { return x.head_gate->zero_head_m / kMm; },
                      [](Scenario& x, double v) { x.head_gate->zero_head_m = v * kMm; }));
+  out.back().low_is_published = true;
   out.push_back(make("actuator_speed_mm_s", "mm/s", "head_gate.actuator_speed_m_s",
                      "head gate actuator speed (paper eq. 16); the scenario's 0 (ideal) is outside the bounds", 0.5,
                      1000.0, Transform::log, 0.02, [](const Scenario& x) { return x.head_gate->actuator_speed_m_s / kMm; },
@@ -100,6 +101,7 @@ void add_downstream(const Scenario& s, std::vector<Parameter>& out) {
                        0.0, 20.0, Transform::linear, 0.05,
                        [](const Scenario& x) { return x.downstream.gate.zero_head_m / kMm; },
                        [](Scenario& x, double v) { x.downstream.gate.zero_head_m = v * kMm; }));
+    out.back().low_is_published = true;
     const double wall_mm = (s.pools.empty() ? 1.0 : s.pools.back().wall_height_m) / kMm;
     out.push_back(make("tail_level_mm", "mm", "downstream.tail_level_m", "level beyond the downstream gate", 0.0, wall_mm,
                        Transform::linear, 0.05, [](const Scenario& x) { return x.downstream.tail_level_m / kMm; },
@@ -148,22 +150,6 @@ void add_reservoir(const Scenario& s, std::vector<Parameter>& out) {
                      [](Scenario& x, double v) { x.upstream.pid_ti_s = v; }));
 }
 
-// Whether the downstream gate runs near zero head in some recording: Swamee's law there, where
-// it is least reliable (its slope unbounded at zero head) and every simulator regularises it its
-// own way, with a head (the level recorded at the downstream end less the tail level) below the
-// gate's opening. In the lab the heads are 4-16 mm against a 20.5 mm opening.
-bool downstream_gate_near_zero_head(const Scenario& s, const std::vector<Recording>& recordings) {
-  const auto& gate = s.downstream.gate;
-  if (s.downstream.kind != scenarios::DownstreamKind::gate || gate.law != scenarios::GateLaw::swamee) return false;
-  return std::any_of(recordings.begin(), recordings.end(), [&](const Recording& r) {
-    if (!r.has(columns::level_downstream_end) || r.size() == 0) return false;
-    std::vector<double> y = r.column(columns::level_downstream_end);
-    std::nth_element(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(y.size() / 2), y.end());
-    const double head_mm = y[y.size() / 2] - s.downstream.tail_level_m / kMm;
-    return std::isfinite(head_mm) && head_mm < gate.opening_m / kMm;
-  });
-}
-
 }  // namespace
 
 double Parameter::to_search(double value) const { return transform == Transform::log ? std::log(value) : value; }
@@ -191,7 +177,6 @@ std::vector<std::string> default_parameters(const Scenario& s, const std::vector
   if (s.head_gate) names.insert(names.end(), {"cd_free", "cd_submerged"});
   for (std::size_t i = 0; i < s.pools.size(); ++i) names.push_back(pool_name("manning_n", i, s.pools.size()));
   if (s.downstream.kind == scenarios::DownstreamKind::gate) names.push_back("downstream_opening_mm");
-  if (downstream_gate_near_zero_head(s, recordings)) names.push_back("downstream_zero_head_mm");
   if (s.downstream.kind == scenarios::DownstreamKind::weir) names.push_back("weir_crest_mm");
   auto all_have = [&](const char* column) {
     return !recordings.empty() &&

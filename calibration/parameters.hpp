@@ -46,6 +46,9 @@ struct Parameter {
   double step = 0.01;
   // Acts on the sampled levels only (offsets, delay): no re-simulation needed.
   bool sensor_only = false;
+  // The low bound is the law as published (a regularisation of 0), not a guess: an estimate
+  // that rests there is an answer — the recordings show none — not a doubtful optimum.
+  bool low_is_published = false;
   std::function<double(const scenarios::Scenario&)> get;
   std::function<void(scenarios::Scenario&, double)> set;
 
@@ -61,8 +64,7 @@ std::string parameter_names(const std::vector<Parameter>& catalog);
 
 // The set a laboratory does not know (docs/calibration.md): the head gate's free and submerged
 // discharge coefficients, the roughness of every pool, the downstream structure's setting (gate
-// opening, or weir crest; and the regularisation of a Swamee downstream gate's law near zero head,
-// downstream_zero_head_mm, when the recordings show it running at a head below its opening) and an offset for every level sensor the recordings hold — except
+// opening, or weir crest) and an offset for every level sensor the recordings hold — except
 // y_up_mm when the recorded upstream level drives the replay. Geometry, bed slope, the actuator
 // and the pump are measured or specified and stay as they are unless --params names them.
 std::vector<std::string> default_parameters(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,

@@ -4,7 +4,7 @@
 // that resolves it finely, are better reproduced by the grid-converged estimates
 // (discretisation.hpp grid_converged) on a finer grid. Measured on an independent-like truth of the
 // lab (1600 cells, minmod θ = 1.5, both gates' laws regularised near zero head) calibrated on 400
-// cells: on five other recordings the residual fell 3.4-15.5x with the estimates on 400 cells and
+// cells (the default set plus downstream_zero_head_mm): on five other recordings the residual fell 3.4-15.5x with the estimates on 400 cells and
 // 5.7-20.9x with the grid-converged ones on 800.
 #pragma once
 
