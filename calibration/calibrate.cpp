@@ -214,7 +214,6 @@ ReplayOptions CalibrateOptions::default_replay() {
   r.use_recorded_upstream = true;
   r.clock_with_upstream = true;
   r.start_at_recorded_level = true;
-  r.step_to_command_changes = true;
   r.fit_fraction = 1.0;
   r.warmup_s = 0.0;
   return r;

@@ -209,7 +209,6 @@ Channels replay_true(const Scenario& scenario, const Replay& p, const ReplayOpti
   so.drive.recording = so.drive.use_recorded_upstream && up_offset != 0.0 ? &corrected : &p.drive;
   so.settle_time = o.settle_time_s;
   so.warning = o.warning;
-  so.step_to_command_changes = o.step_to_command_changes;
   const Recording r = scenarios::simulate(s, e, so);
   const auto at_recording_samples = [&](const std::string& c) {
     const std::vector<double>& all = r.column(c);

@@ -48,9 +48,6 @@ struct ReplayOptions {
   // (Replay::initial_upstream_mm, less the scenario's y_up sensor offsets) instead of the
   // scenario's upstream level_m (upstream kinds "level" and "reservoir").
   bool start_at_recorded_level = false;
-  // End time steps at the command's switching instants (SimulateOptions::step_to_command_changes):
-  // the replay is then continuous in the scenario's parameters, which finite differences need.
-  bool step_to_command_changes = false;
   // Called with a warning of the simulation (a failed steady state, see scenarios/simulate.hpp);
   // unset, it is printed to stderr.
   std::function<void(const std::string&)> warning;

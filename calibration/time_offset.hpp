@@ -5,7 +5,7 @@
 // a sample or two, so a few tenths of a second matter. The default set has no parameter for it,
 // and a fit without one bends the hydraulics to the shift: on four 80 s recordings of the
 // six-parameter truth (docs/calibration.md, "A time offset between command and levels"), levels
-// 0.3 s early or late left a cost of 0.93-0.98 against 0.038, Cd free at 0.60 / 0.39 (truth 0.9).
+// 0.3 s early or late left a cost of 0.93-0.98 against 0.033, Cd free at 0.60 / 0.39 (truth 0.9).
 //
 // After the first fit, the levels' delay (`sensor_delay_s`, a re-observation of the same
 // simulations: no simulation per point) is scanned at the estimates. Where the best delay lowers
@@ -23,9 +23,9 @@ namespace canalsim::calibration {
 // The fraction of the cost a time offset must explain to be fitted. Measured at the first fit's
 // estimates (100 cells; four 80 s recordings of the six-parameter truth): levels 0.05 s early
 // explain 0.38 of the cost, 0.1 s early or late 0.74 / 0.77, 0.3 s early or late 0.90 / 0.74.
-// With command and levels on one clock the scan's best (a delay of 0.014-0.015 s: the coarser
-// grid's dispersion) explains 0.082 on a 200-cell truth, 0.035 and 0.043 on 400- and 800-cell
-// ones.
+// With command and levels on one clock the scan's best (a delay of 0.009 s: the coarser grid's
+// dispersion) explains 0.038 on a 200-cell truth (0.082 at 0.014 s before the gate switched when
+// its command did, in truth and model; 0.035 and 0.043 on 400- and 800-cell truths then).
 constexpr double kTimeOffsetGain = 0.15;
 
 struct TimeOffsetScan {

@@ -30,10 +30,6 @@ calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
           .settle_time_s = o.settle_time_s,
           .warmup_s = o.warmup_s,
           .start_at_recorded_level = o.use_recorded_upstream,
-          // Continuous in the effects' parameters (as the calibration's replay): a gate that
-          // switched at the first solver step after the command made the cost jitter by ~1 %
-          // between parameters 1 % of their range apart, a false gradient for the fits.
-          .step_to_command_changes = true,
           .warning = nullptr};
 }
 

@@ -36,8 +36,8 @@ namespace {
 // effect and one for the step). Measured on the lab: a leak and a downstream gate converge in 13.
 constexpr int kJointIterations = 15;
 
-// Forward-difference steps, as a share of each θ's catalog range. The replay ends a solver step at
-// every switch of the command (diagnosis_replay), so the response is continuous in the parameters;
+// Forward-difference steps, as a share of each θ's catalog range. Every run ends a solver step at
+// every switch of the command (docs/gates.md), so the response is continuous in the parameters;
 // without that, the gate switched at the first step boundary after the command, the simulated cost
 // jittered by ~1 % between parameters 1 % of their range apart, and Levenberg–Marquardt stopped a
 // leak and a downstream gate at 3.9 and −0.7 mm (truth 2.5 and −1.5; now 2.50 and −1.52).

@@ -1,5 +1,6 @@
 #include "scenarios/prbs.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -140,6 +141,21 @@ double PrbsSignal::value(double t) const {
   const double clocks = (t - options_.start_time) / options_.clock_period + 1e-9;
   const auto k = static_cast<std::uint64_t>(std::floor(clocks)) % bits_.size();
   return options_.operating_point + (bits_[k] ? options_.amplitude : -options_.amplitude);
+}
+
+std::vector<double> PrbsSignal::jumps(double from, double to) const {
+  std::vector<double> out;
+  const double tc = options_.clock_period;
+  // The first edge at or after `from` (floor, not ceil: `from` itself is excluded below).
+  const double first = std::max(0.0, std::floor((from - options_.start_time) / tc));
+  for (auto k = static_cast<std::uint64_t>(first);; ++k) {
+    const double edge = options_.start_time + static_cast<double>(k) * tc;
+    if (edge > to) break;
+    if (edge <= from) continue;
+    const double before = k == 0 ? options_.operating_point : value(edge - 0.5 * tc);
+    if (value(edge) != before) out.push_back(edge);
+  }
+  return out;
 }
 
 }  // namespace canalsim

@@ -100,6 +100,9 @@ class PrbsSignal final : public Signal {
   // Throws std::invalid_argument with validate()'s message when the options are invalid.
   explicit PrbsSignal(const PrbsOptions& options);
   double value(double t) const override;
+  // The clock edges start + k Tc in (from, to] where the bit changes (the first edge, from the
+  // operating point, when the first bit's level differs from it).
+  std::vector<double> jumps(double from, double to) const override;
 
   const std::vector<std::uint8_t>& bits() const { return bits_; }
   PrbsDesign design() const { return design_prbs(options_.stages, options_.clock_period); }

@@ -15,6 +15,11 @@ bool ends_with(const std::string& text, const std::string& suffix) {
 
 }  // namespace
 
+std::vector<double> StepSignal::jumps(double from, double to) const {
+  if (change_ == 0.0 || !(start_ > from && start_ <= to)) return {};
+  return {start_};
+}
+
 RampSignal::RampSignal(double base, double change, double start, double duration)
     : base_(base), change_(change), start_(start), duration_(duration) {
   if (!(duration > 0.0) || !std::isfinite(duration)) {
@@ -67,6 +72,15 @@ double SeriesSignal::value(double t) const {
   if (interpolation_ == Interpolation::zero_order_hold) return values_[i - 1];
   const double w = (t - times_[i - 1]) / (times_[i] - times_[i - 1]);
   return values_[i - 1] + w * (values_[i] - values_[i - 1]);
+}
+
+std::vector<double> SeriesSignal::jumps(double from, double to) const {
+  std::vector<double> out;
+  if (interpolation_ != Interpolation::zero_order_hold) return out;
+  for (std::size_t i = 1; i < times_.size(); ++i) {
+    if (times_[i] > from && times_[i] <= to && values_[i] != values_[i - 1]) out.push_back(times_[i]);
+  }
+  return out;
 }
 
 double si_scale_of_column(const std::string& column) {

@@ -22,6 +22,10 @@ class Signal {
   virtual ~Signal() = default;
   virtual double value(double t) const = 0;
   double operator()(double t) const { return value(t); }
+  // The instants in (from, to] at which the value jumps, in increasing order (none for a
+  // continuous signal). The simulator ends a time step at each, so that a gate switches when its
+  // command does and not at the first step boundary after it (scenarios/simulate.cpp).
+  virtual std::vector<double> jumps(double /*from*/, double /*to*/) const { return {}; }
 };
 
 using SignalPtr = std::shared_ptr<const Signal>;
@@ -40,6 +44,7 @@ class StepSignal final : public Signal {
  public:
   StepSignal(double base, double change, double start) : base_(base), change_(change), start_(start) {}
   double value(double t) const override { return t < start_ ? base_ : base_ + change_; }
+  std::vector<double> jumps(double from, double to) const override;
 
  private:
   double base_, change_, start_;
@@ -76,6 +81,8 @@ class SeriesSignal final : public Signal {
                                      Interpolation interpolation = Interpolation::linear);
 
   double value(double t) const override;
+  // Zero-order hold: the sample times whose value differs from the one before; linear: none.
+  std::vector<double> jumps(double from, double to) const override;
   std::size_t size() const { return times_.size(); }
 
  private:

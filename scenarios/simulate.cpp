@@ -197,23 +197,41 @@ std::vector<double> gate_openings(const Scenario& s) {
 
 }  // namespace
 
-std::function<double(double)> command_signal(const ExperimentSpec& e, const Drive& drive) {
-  const double op = e.operating_opening_mm * kMm;
-  if (drive.recording) {
-    auto series = std::make_shared<SeriesSignal>(
-        SeriesSignal::from_recording(*drive.recording, columns::gate_command, Interpolation::zero_order_hold));
-    // Before t = 0 the canal rested at the recording's operating point (its metadata, as
-    // `canalsim simulate` writes it), else at the first command.
-    const std::string meta = drive.recording->meta("operating_opening_mm");
+namespace {
+
+// The drive recording's command, resting before t = 0 at the recording's operating point (its
+// metadata, as `canalsim simulate` writes it), else at the first command.
+class RecordedCommand final : public Signal {
+ public:
+  explicit RecordedCommand(const Recording& recording)
+      : series_(SeriesSignal::from_recording(recording, columns::gate_command, Interpolation::zero_order_hold)) {
+    const std::string meta = recording.meta("operating_opening_mm");
     char* end = nullptr;
     const double rest_mm = meta.empty() ? NAN : std::strtod(meta.c_str(), &end);
-    const double rest = std::isfinite(rest_mm) && end != meta.c_str() ? rest_mm * kMm : series->value(0.0);
-    return [series, rest](double t) { return t < 0.0 ? rest : series->value(t); };
+    rest_ = std::isfinite(rest_mm) && end != meta.c_str() ? rest_mm * kMm : series_.value(0.0);
   }
+  double value(double t) const override { return t < 0.0 ? rest_ : series_.value(t); }
+  std::vector<double> jumps(double from, double to) const override {
+    std::vector<double> out;
+    if (from < 0.0 && to >= 0.0 && series_.value(0.0) != rest_) out.push_back(0.0);
+    const std::vector<double> later = series_.jumps(std::max(from, 0.0), to);
+    out.insert(out.end(), later.begin(), later.end());
+    return out;
+  }
+
+ private:
+  SeriesSignal series_;
+  double rest_ = 0.0;
+};
+
+}  // namespace
+
+SignalPtr command_input(const ExperimentSpec& e, const Drive& drive) {
+  if (drive.recording) return std::make_shared<RecordedCommand>(*drive.recording);
+  const double op = e.operating_opening_mm * kMm;
   const InputSpec& in = e.input;
-  SignalPtr signal;
   switch (in.kind) {
-    case InputKind::constant: signal = std::make_shared<ConstantSignal>(op); break;
+    case InputKind::constant: return std::make_shared<ConstantSignal>(op);
     case InputKind::prbs: {
       PrbsOptions o;
       o.stages = in.prbs_stages;
@@ -221,31 +239,33 @@ std::function<double(double)> command_signal(const ExperimentSpec& e, const Driv
       o.amplitude = in.amplitude_mm * kMm;
       o.operating_point = op;
       o.seed = in.prbs_seed;
-      signal = std::make_shared<PrbsSignal>(o);
-      break;
+      return std::make_shared<PrbsSignal>(o);
     }
-    case InputKind::step: signal = std::make_shared<StepSignal>(op, in.amplitude_mm * kMm, in.start_s); break;
-    case InputKind::ramp:
-      signal = std::make_shared<RampSignal>(op, in.amplitude_mm * kMm, in.start_s, in.ramp_duration_s);
-      break;
+    case InputKind::step: return std::make_shared<StepSignal>(op, in.amplitude_mm * kMm, in.start_s);
+    case InputKind::ramp: return std::make_shared<RampSignal>(op, in.amplitude_mm * kMm, in.start_s, in.ramp_duration_s);
     case InputKind::file: {
       const Recording rec = read_recording(in.file, input_series_columns());
-      signal = std::make_shared<SeriesSignal>(
+      return std::make_shared<SeriesSignal>(
           SeriesSignal::from_recording(rec, columns::gate_command, Interpolation::zero_order_hold));
-      break;
     }
   }
+  throw std::logic_error("command_input: unknown input kind");
+}
+
+std::function<double(double)> command_signal(const ExperimentSpec& e, const Drive& drive) {
+  SignalPtr signal = command_input(e, drive);
   return [signal](double t) { return signal->value(t); };
 }
 
 BuiltCanal build_canal(const Scenario& input, const ExperimentSpec& e, const Drive& drive) {
   const Scenario s = resolve_design(input);  // automatic openings, orifice sizes, design profiles
-  BuiltCanal b{solver::Canal(solver_options(s.numerics)), {}, {}, {}, {}, {}, {}, 0.0, false, {}, {}, {}, {}, {}};
+  BuiltCanal b{solver::Canal(solver_options(s.numerics)), {}, {}, {}, {}, {}, {}, 0.0, false, {}, {}, {}, {}, {}, {}};
   for (const PoolSpec& pool : s.pools) {
     check(b.canal.add_reach(reach_spec(s, pool)), s.source + ": pool '" + pool.name + "'");
     b.offtakes.push_back(apply_offtakes(b.canal.reach(b.canal.reach_count() - 1), pool));
   }
-  const auto command = command_signal(e, drive);
+  b.command = command_input(e, drive);
+  const auto command = [signal = b.command](double t) { return signal->value(t); };
   if (s.head_gate) {
     b.supply = make_supply(s, drive, &b.reservoir);
     auto op = operation_for(*s.head_gate, command);
@@ -528,15 +548,11 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   TrueState before = snapshot(), after = before;
   WallWatch walls(s);
   std::size_t next_event = 0;
-  // Instants at which the drive's command changes (SimulateOptions::step_to_command_changes).
-  std::vector<double> breaks;
-  if (options.step_to_command_changes && options.drive.recording) {
-    const auto& dt = options.drive.recording->column(columns::time);
-    const auto& du = options.drive.recording->column(columns::gate_command);
-    for (std::size_t i = 1; i < dt.size(); ++i) {
-      if (du[i] != du[i - 1] && dt[i] > 0.0) breaks.push_back(dt[i]);
-    }
-  }
+  // A step ends just after every jump of the command, so the gate switches when its command does
+  // (eq. 16 from that instant), not at the first step boundary after it: up to a step (tens of
+  // ms) late, which shifts every response to a switch and makes it jump, not vary smoothly, with
+  // the scenario's parameters (calibration and diagnosis differentiate it).
+  const std::vector<double> breaks = b.command->jumps(b.canal.time(), e.duration_s);
   std::size_t next_break = 0;
   constexpr double just_after = 1e-9;  // s: the zero-order-hold command takes its new value from t_i on
   for (std::size_t k = 0; k < samples; ++k) {

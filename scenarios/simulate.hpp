@@ -17,6 +17,7 @@
 #include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
+#include "scenarios/signals.hpp"
 #include "solver/canal.hpp"
 
 namespace canalsim::scenarios {
@@ -52,6 +53,8 @@ struct BuiltCanal {
   std::vector<double> openings;
   // Bed elevation at each pool's downstream end x = L [m].
   std::vector<double> check_bed;
+  // The command signal of the controlled gate (its jumps end time steps: simulate.cpp).
+  SignalPtr command;
   // Depth at the check of pool i (0-based) [m]: the water level extrapolated from the last two
   // cell centres to x = L (the one-sided end reconstruction of the scheme, solver/scheme.cpp)
   // above check_bed. The last cell's own level sits half a cell upstream, which on a backwater
@@ -85,11 +88,6 @@ struct SimulateOptions {
   // settle_time with the command held at its operating point and warn, naming the state the
   // experiment then starts from (false). Never silent.
   bool require_steady_state = false;
-  // End a time step at every instant the drive recording's command changes (just after it), so
-  // that the gate switches exactly then rather than at the first step boundary after it. The
-  // response is then continuous in the scenario's parameters (calibration differentiates it);
-  // off by default, which keeps earlier results bit for bit.
-  bool step_to_command_changes = false;
   // Receives the failed-steady-state warning (one line, without the "canalsim: warning: "
   // prefix); unset, it is printed to stderr.
   std::function<void(const std::string&)> warning;
@@ -103,7 +101,8 @@ BuiltCanal build_canal(const Scenario& scenario, const ExperimentSpec& experimen
                        const Drive& drive = {});
 
 // The gate command u(t) [m] of an experiment: operating point plus its input signal; the drive
-// recording's u_mm when given.
+// recording's u_mm when given (resting before t = 0 at the recording's operating point).
+SignalPtr command_input(const ExperimentSpec& experiment, const Drive& drive);
 std::function<double(double)> command_signal(const ExperimentSpec& experiment, const Drive& drive);
 
 // Runs one experiment and returns its recording (columns t_s, u_mm, x_up_mm, y_up_mm, y_dw_mm,

@@ -139,6 +139,28 @@ TEST(PrbsSignal, SampleTimesOnAClockEdgeTakeTheNewBit) {
   EXPECT_EQ(u.value(50 * 0.13), u.value(6.5 + 0.1));
 }
 
+// The jumps are the clock edges where the level changes, found here by sampling each clock
+// period's middle: the first edge (from the operating point) included, edges without a change,
+// and `from` itself, excluded.
+TEST(PrbsSignal, JumpsAreTheClockEdgesWhereTheBitChanges) {
+  PrbsOptions options;
+  options.operating_point = 0.025;
+  options.start_time = 2.0;
+  const PrbsSignal u(options);
+  std::vector<double> expected;
+  double before = u.value(1.0);
+  for (int k = 0; 2.0 + 0.5 * k <= 60.0; ++k) {
+    const double edge = 2.0 + 0.5 * k, level = u.value(edge + 0.25);
+    if (level != before) expected.push_back(edge);
+    before = level;
+  }
+  ASSERT_GT(expected.size(), 40u);  // half the 116 edges change on average
+  EXPECT_LT(expected.size(), 116u);
+  EXPECT_EQ(u.jumps(0.0, 60.0), expected);
+  const std::vector<double> later = u.jumps(expected[3], 60.0);
+  EXPECT_EQ(later, std::vector<double>(expected.begin() + 4, expected.end()));
+}
+
 TEST(PrbsOptions, ValidationNamesTheField) {
   PrbsOptions options;
   EXPECT_TRUE(options.validate());

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 namespace canalsim {
 namespace {
@@ -14,6 +15,12 @@ TEST(StepSignal, JumpsAtTheStartTime) {
   EXPECT_EQ(step.value(9.999), 0.025);
   EXPECT_DOUBLE_EQ(step.value(10.0), 0.030);
   EXPECT_DOUBLE_EQ(step(1e6), 0.030);
+}
+
+TEST(StepSignal, JumpsOnceAtItsStartWhenItChanges) {
+  EXPECT_EQ(StepSignal(0.025, 0.005, 10.0).jumps(0.0, 20.0), std::vector<double>{10.0});
+  EXPECT_TRUE(StepSignal(0.025, 0.005, 10.0).jumps(10.0, 20.0).empty());  // (from, to]
+  EXPECT_TRUE(StepSignal(0.025, 0.0, 10.0).jumps(0.0, 20.0).empty());
 }
 
 TEST(RampSignal, RisesLinearlyThenHolds) {
@@ -47,6 +54,13 @@ TEST(SeriesSignal, ZeroOrderHoldKeepsTheLatestSample) {
   EXPECT_EQ(series.value(1.0), 20.0);
   EXPECT_EQ(series.value(2.999), 20.0);
   EXPECT_EQ(series.value(3.0), 0.0);
+}
+
+TEST(SeriesSignal, JumpsWhereTheHeldValueChangesAndNowhereWhenInterpolated) {
+  const std::vector<double> t{0.0, 1.0, 2.0, 3.0}, v{10.0, 20.0, 20.0, 0.0};
+  EXPECT_EQ(SeriesSignal(t, v, Interpolation::zero_order_hold).jumps(-1.0, 5.0), (std::vector<double>{1.0, 3.0}));
+  EXPECT_EQ(SeriesSignal(t, v, Interpolation::zero_order_hold).jumps(1.0, 2.5), std::vector<double>{});
+  EXPECT_TRUE(SeriesSignal(t, v).jumps(-1.0, 5.0).empty());
 }
 
 TEST(SeriesSignal, HoldsTheEndValuesOutsideTheRecord) {

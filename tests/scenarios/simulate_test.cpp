@@ -193,6 +193,27 @@ TEST(Simulate, DriveRecordingIsReplayed) {
   EXPECT_EQ(replay.column("y_dwe_mm"), first.column("y_dwe_mm"));
 }
 
+// The gate leaves when its command does: with the constant-speed actuator of eq. (16), the
+// opening a sample after a step of the command that falls between samples (and between solver
+// steps) is the operating opening plus speed × elapsed time, exactly, and before it, unmoved.
+// A gate that switched at the first solver step after the command (as before) would lag by up to
+// a step: 40 ms on the lab's 100 cells, 0.2 mm of travel here.
+TEST(Simulate, AGateDrivenThroughItsActuatorLeavesWhenItsCommandSteps) {
+  Scenario lab = builtin_scenario("lab");
+  lab.head_gate->actuator_speed_m_s = 0.005;  // 5 mm/s
+  lab.sensors.resolution_mm = 0.0;
+  ExperimentSpec step = lab_experiment(25.0, 3.0, InputKind::step);
+  step.input.start_s = 1.05;  // between the samples at 1.04 and 1.17 s
+  step.input.amplitude_mm = 10.0;  // still travelling at the end (3.05 s)
+  const Recording rec = simulate(lab, step);
+  const auto& t = rec.column("t_s");
+  const auto& x = rec.column("x_up_mm");
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double expected = 25.0 + std::max(5.0 * (t[k] - 1.05), 0.0);
+    EXPECT_NEAR(x[k], expected, 1e-6) << "t = " << t[k];
+  }
+}
+
 TEST(Simulate, ScenarioWithoutAControlledGateIsRejected) {
   Scenario lab = builtin_scenario("lab");
   lab.head_gate->controlled = false;
