@@ -70,8 +70,8 @@ struct CalibrateOptions {
   // library's default): the scenario's grid; `canalsim calibrate` refines twice at most.
   int grid_refinements = 0;
   // The model written (written_model.hpp): with the grid check, when the grid-converged estimates
-  // on twice the last grid's cells fit the recordings better than the estimates, calibrated holds
-  // them (and that grid). false (the library's default): the estimates on the last grid;
+  // on twice (or, while the grid still limits them, four times) the last grid's cells fit the
+  // recordings better than the estimates, calibrated holds them (and that grid). false (the library's default): the estimates on the last grid;
   // `canalsim calibrate` turns it on.
   bool write_grid_converged = false;
   ProgressCallback progress;
@@ -180,10 +180,11 @@ struct Calibration {
   // none was found.
   std::string time_offset_note;
   // What `calibrated` holds (CalibrateOptions::write_grid_converged): the estimates on the last
-  // grid, or the grid-converged estimates on twice its cells when they fit better; then the
-  // "after" figures are those of that model. The note says which and the costs compared; empty
-  // when no choice was made.
+  // grid, or the grid-converged estimates on twice (or four times) its cells when they fit better
+  // (written_model.hpp); then the "after" figures are those of that model. The note says which and
+  // the costs compared; empty when no choice was made.
   bool written_grid_converged = false;
+  int written_cells_factor = 1;  // the written model's cells over the last grid's
   std::string written_note;
   scenarios::Scenario calibrated;
 };

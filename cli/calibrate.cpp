@@ -84,7 +84,7 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   for (const auto& p : c.parameters) {
     const std::string spread = std::isfinite(p.std) ? "± " + format_g(p.std, 2) : "std not determined";
     // The key holds the value for the model written: the estimate for the grid calibrated on, or
-    // the grid-converged estimate on twice its cells (Calibration::written_grid_converged).
+    // the grid-converged estimate on a finer grid (Calibration::written_grid_converged).
     const std::string converged = !c.grid.done                ? ""
                                   : c.written_grid_converged ? "; written: its grid-converged value " + format_g(p.converged, 6)
                                                               : "; grid-converged " + format_g(p.converged, 6);
@@ -100,9 +100,11 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
     }
   }
   for (std::size_t i = 0; (c.grids.size() > 1 || c.written_grid_converged) && i < c.calibrated.pools.size(); ++i) {
-    const std::string was = std::to_string(c.grids.empty() ? c.calibrated.pools[i].cells : c.grids.front()[i]);
+    const int cells = c.calibrated.pools[i].cells;
+    const std::string was = std::to_string(c.grids.empty() ? cells / c.written_cells_factor : c.grids.front()[i]);
+    const std::string times = c.written_cells_factor == 2 ? "twice" : std::to_string(c.written_cells_factor) + " times";
     const std::string note = c.written_grid_converged
-                                 ? "twice the cells of the last grid calibrated on (was " + was + "; " + c.grid_note +
+                                 ? times + " the cells of the last grid calibrated on (was " + was + "; " + c.grid_note +
                                        "), with the grid-converged estimates"
                                  : "calibrated on this grid (was " + was + "): " + c.grid_note;
     edits.push_back({"pools[" + std::to_string(i + 1) + "].cells", 0.0, note, std::to_string(c.calibrated.pools[i].cells)});
@@ -219,7 +221,7 @@ void add_calibrate_command(CLI::App& app) {
       ->check(integer_in(0, 3, "a number of refinements"));
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
-                "its cells fit the recordings better (by default those are written; docs/calibration.md)");
+                "or four times its cells fit the recordings better (by default those are written; docs/calibration.md)");
   cmd->add_option("--replay", args->replay,
                   "diagnosis: replay the recordings as `diagnose` does (the upstream model drives the head gate; "
                   "for a scenario diagnosed next); recorded-upstream: drive the head gate with the recorded y_up_mm "

@@ -135,7 +135,7 @@ std::vector<Recording> clean_independent_recordings() {
 // What `canalsim calibrate --scenario lab op1.csv ... op4.csv -o cal.toml` runs: the diagnosis'
 // replay (diagnosis::calibration_replay_for_diagnosis; the upstream model drives the head gate,
 // so the default set adds the y_up offset), two starts at most, two grid refinements at most, the
-// grid-converged estimates on twice the cells written when they fit better.
+// grid-converged estimates on twice (or four times) the cells written when they fit better.
 // Argument `truth`: 0 the perturbed, noisy 800-cell truth above; 1 clean_independent_recordings().
 void BM_CalibrateAsTheCommandLineDoes(benchmark::State& state) {
   calibration::CalibrateOptions options;
