@@ -83,8 +83,8 @@ bool cost_is_the_grids(ReplayProblem& problem, const Run& run) {
 // the run's last point is the one Levenberg–Marquardt took there. Measured on the benchmark's
 // clean 800-cell truth (bench/README.md, truth:1): the 100-cell run stopped at its 30 iterations
 // still creeping along the discharge coefficients' valley; a second start there took the
-// calibration from 780 to 1260 simulations, and the refined grids, continuing the first run,
-// converge either way.
+// calibration from 716 to 1260 simulations, and the refined grids, continuing the first run,
+// reach the same optimum either way.
 std::string doubt(ReplayProblem& problem, const Run& run, bool refinable) {
   const auto& params = problem.parameters();
   if (!std::isfinite(run.cost)) return "the first run found no usable solution";

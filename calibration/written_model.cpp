@@ -22,7 +22,7 @@ std::string cells_text(const scenarios::Scenario& s) { return std::to_string(s.p
 // A further doubling is tried while the last one cut the cost on the fitted recordings below this
 // share of the cost before it: the grid, not the physics, still limits the model. Measured on the
 // 1600-cell truth of docs/calibration.md: 0.0135 (estimates, 400 cells) -> 0.0070 (converged, 800)
-// -> 0.0035 (converged, 1600), and op1* validated 4.9x on 800 cells, 7.9x on 1600.
+// -> 0.0036 (converged, 1600), and op1* validated 4.9x on 800 cells, 7.9x on 1600.
 constexpr double kStillGridLimited = 0.7;
 constexpr int kMostDoublings = 2;  // up to four times the last grid's cells
 
