@@ -3,6 +3,8 @@
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <exception>
 #include <string>
 
@@ -12,23 +14,28 @@ namespace canalsim::calibration {
 namespace {
 
 // The least-squares problem as Ceres sees it: one residual block of all residuals on one
-// parameter block (the search coordinates). Jacobians by ReplayProblem's parallel forward
-// differences. A simulation that fails makes the point unusable (Ceres then shrinks its step).
+// parameter block, the search coordinates of the parameters not held at a bound (`free`; the held
+// ones keep their values in `full`). Jacobians by ReplayProblem's parallel forward differences. A
+// simulation that fails makes the point unusable (Ceres then shrinks its step).
 class ReplayCost : public ceres::CostFunction {
  public:
-  explicit ReplayCost(ReplayProblem& problem) : problem_(problem) {
+  ReplayCost(ReplayProblem& problem, std::vector<double> full, std::vector<std::size_t> free)
+      : problem_(problem), full_(std::move(full)), free_(std::move(free)) {
     set_num_residuals(static_cast<int>(problem.residual_count()));
-    mutable_parameter_block_sizes()->push_back(static_cast<int>(problem.parameters().size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(free_.size()));
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const std::size_t p = problem_.parameters().size();
-    const std::vector<double> z(parameters[0], parameters[0] + p);
+    std::vector<double> z = full_;
+    for (std::size_t k = 0; k < free_.size(); ++k) z[free_[k]] = parameters[0][k];
     try {
       const std::vector<double> r = problem_.residuals(problem_.predict(z));
       std::copy(r.begin(), r.end(), residuals);
       if (jacobians && jacobians[0]) {
         const std::vector<double> J = problem_.jacobian(z, r);
-        std::copy(J.begin(), J.end(), jacobians[0]);
+        const std::size_t p = z.size(), f = free_.size();
+        for (std::size_t row = 0; row < r.size(); ++row) {
+          for (std::size_t k = 0; k < f; ++k) jacobians[0][row * f + k] = J[row * p + free_[k]];
+        }
       }
     } catch (const std::exception&) {
       return false;
@@ -38,6 +45,8 @@ class ReplayCost : public ceres::CostFunction {
 
  private:
   ReplayProblem& problem_;
+  std::vector<double> full_;
+  std::vector<std::size_t> free_;
 };
 
 class IterationProgress : public ceres::IterationCallback {
@@ -95,19 +104,67 @@ class RefreshTheJacobianAfterAFailedStep : public ceres::IterationCallback {
   ReplayProblem& problem_;
 };
 
-}  // namespace
+// Stops a run when a step it accepted put a free parameter on its bound: Ceres projects its
+// unconstrained step onto the bounds, so every later step still spends part of itself pushing that
+// parameter outwards and the projected steps creep (on the lab's 400 cells with
+// downstream_zero_head_mm resting at its published 0, seven differenced iterations took the cost
+// from 114.1 to 113.7). The run then continues with it held there (active set, Nocedal & Wright
+// 2006, §16.5), and releases it when the cost's gradient points inside.
+class StopOnReachingABound : public ceres::IterationCallback {
+ public:
+  // `watched`: per free parameter, whether reaching a bound stops the run.
+  StopOnReachingABound(const std::vector<double>& x, std::vector<double> low, std::vector<double> high,
+                       std::vector<bool> watched)
+      : x_(x), low_(std::move(low)), high_(std::move(high)), watched_(std::move(watched)) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (s.iteration == 0 || !s.step_is_successful) return ceres::SOLVER_CONTINUE;
+    for (std::size_t k = 0; k < x_.size(); ++k) {
+      if (watched_[k] && (x_[k] <= low_[k] || x_[k] >= high_[k])) reached_.push_back(k);
+    }
+    return reached_.empty() ? ceres::SOLVER_CONTINUE : ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+  }
+  const std::vector<std::size_t>& reached() const { return reached_; }
 
-Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_iterations, const ProgressCallback& progress_to,
-                        int run, int runs, double function_tolerance, bool secant) {
-  ReplayCost cost(problem);
+ private:
+  const std::vector<double>& x_;  // Ceres' parameter block, current at every callback
+  std::vector<double> low_, high_;
+  std::vector<bool> watched_;
+  std::vector<std::size_t> reached_;
+};
+
+struct Leg {
+  std::vector<std::size_t> reached;  // free parameters (indices into z) a step put on a bound
+  int iterations = 0;
+  std::string report;
+  bool converged = false;
+  double cost = std::numeric_limits<double>::infinity();
+};
+
+// One Ceres solve over the parameters not `held`, from z (updated in place); it stops when a
+// parameter not `released` before reaches a bound.
+Leg solve_free(ReplayProblem& problem, std::vector<double>& z, const std::vector<bool>& held,
+               const std::vector<bool>& released, int max_iterations, const ProgressCallback& progress_to, int run,
+               int runs, double function_tolerance, bool secant) {
+  const auto& params = problem.parameters();
+  std::vector<std::size_t> free;
+  std::vector<double> x, low, high;
+  std::vector<bool> watched;
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    if (held[j]) continue;
+    free.push_back(j);
+    watched.push_back(!released[j]);
+    x.push_back(z[j]);
+    low.push_back(params[j].to_search(params[j].low));
+    high.push_back(params[j].to_search(params[j].high));
+  }
+  ReplayCost cost(problem, z, free);
   ceres::Problem::Options po;
   po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem lsq(po);
-  lsq.AddResidualBlock(&cost, nullptr, z.data());
-  const auto& params = problem.parameters();
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    lsq.SetParameterLowerBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].low));
-    lsq.SetParameterUpperBound(z.data(), static_cast<int>(j), params[j].to_search(params[j].high));
+  lsq.AddResidualBlock(&cost, nullptr, x.data());
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    lsq.SetParameterLowerBound(x.data(), static_cast<int>(k), low[k]);
+    lsq.SetParameterUpperBound(x.data(), static_cast<int>(k), high[k]);
   }
   ceres::Solver::Options so;
   so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -122,22 +179,87 @@ Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_i
   // hydraulic parameter and recording) at every line-search point as well, which more than
   // doubled the simulations; the bounds still hold, the step being projected onto them.
   so.max_num_line_search_step_size_iterations = 0;
+  so.update_state_every_iteration = true;  // StopOnReachingABound reads x
   IterationProgress progress(progress_to, run, runs, max_iterations);
   so.callbacks.push_back(&progress);
   StopAtTheModelsResolution resolution;
   so.callbacks.push_back(&resolution);
+  StopOnReachingABound bound(x, low, high, watched);
+  so.callbacks.push_back(&bound);
   RefreshTheJacobianAfterAFailedStep refresh(problem);
   if (secant) so.callbacks.push_back(&refresh);
   problem.use_secant_updates(secant);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &lsq, &summary);
   problem.use_secant_updates(false);
+  for (std::size_t k = 0; k < free.size(); ++k) z[free[k]] = x[k];
+  Leg leg;
+  for (std::size_t k : bound.reached()) leg.reached.push_back(free[k]);
+  leg.iterations = static_cast<int>(summary.iterations.size());
+  leg.report = summary.BriefReport();
+  leg.converged = summary.termination_type == ceres::CONVERGENCE || summary.termination_type == ceres::USER_SUCCESS;
+  if (summary.IsSolutionUsable()) leg.cost = 2.0 * summary.final_cost / static_cast<double>(problem.residual_count());
+  return leg;
+}
+
+// The held parameters whose cost gradient J^T r at z points inside their bounds: moving them off
+// the bound would lower the cost (the Karush–Kuhn–Tucker sign test). The Jacobian is the one the
+// run took at z (ReplayProblem caches it), so the test costs no simulation.
+std::vector<std::size_t> held_that_would_leave(ReplayProblem& problem, const std::vector<double>& z,
+                                               const std::vector<bool>& held) {
+  const auto& params = problem.parameters();
+  const std::size_t p = params.size();
+  const std::vector<double> r = problem.residuals(problem.predict(z));
+  const std::vector<double> J = problem.jacobian(z, r);
+  std::vector<std::size_t> out;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (!held[j]) continue;
+    double gradient = 0.0;
+    for (std::size_t row = 0; row < r.size(); ++row) gradient += J[row * p + j] * r[row];
+    const bool at_low = z[j] <= params[j].to_search(params[j].low);
+    if (at_low ? gradient < 0.0 : gradient > 0.0) out.push_back(j);
+  }
+  return out;
+}
+
+}  // namespace
+
+Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_iterations, const ProgressCallback& progress_to,
+                        int run, int runs, double function_tolerance, bool secant) {
+  const std::size_t p = problem.parameters().size();
+  std::vector<bool> held(p, false), released(p, false);
   Run out;
   out.z = z;
-  out.iterations = static_cast<int>(summary.iterations.size());
-  out.report = summary.BriefReport();
-  out.converged = summary.termination_type == ceres::CONVERGENCE || summary.termination_type == ceres::USER_SUCCESS;
-  if (summary.IsSolutionUsable()) out.cost = 2.0 * summary.final_cost / static_cast<double>(problem.residual_count());
+  // Each leg either holds a parameter more, or releases one never released before: at most 2p + 1.
+  for (std::size_t leg_count = 0; leg_count <= 2 * p && out.iterations < max_iterations; ++leg_count) {
+    if (std::find(held.begin(), held.end(), false) == held.end()) break;
+    const Leg leg = solve_free(problem, z, held, released, max_iterations - out.iterations, progress_to, run, runs,
+                               function_tolerance, secant);
+    out.iterations += leg.iterations;
+    out.report = leg.report;
+    if (!std::isfinite(leg.cost)) break;
+    out.z = z;
+    out.cost = leg.cost;
+    out.converged = leg.converged;
+    if (!leg.reached.empty()) {
+      for (std::size_t j : leg.reached) held[j] = true;
+      out.converged = false;  // continued with the parameter held
+      continue;
+    }
+    if (!leg.converged || std::find(held.begin(), held.end(), true) == held.end()) break;
+    std::vector<std::size_t> leaving;
+    try {
+      leaving = held_that_would_leave(problem, z, held);
+    } catch (const std::exception&) {
+      break;
+    }
+    if (leaving.empty()) break;
+    for (std::size_t j : leaving) {
+      held[j] = false;
+      released[j] = true;  // from now on Ceres' projection keeps it within its bounds
+    }
+    out.converged = false;
+  }
   return out;
 }
 

@@ -176,7 +176,9 @@ std::vector<std::string> default_parameters(const Scenario& s, const std::vector
   std::vector<std::string> names;
   if (s.head_gate) names.insert(names.end(), {"cd_free", "cd_submerged"});
   for (std::size_t i = 0; i < s.pools.size(); ++i) names.push_back(pool_name("manning_n", i, s.pools.size()));
-  if (s.downstream.kind == scenarios::DownstreamKind::gate) names.push_back("downstream_opening_mm");
+  if (s.downstream.kind == scenarios::DownstreamKind::gate) {
+    names.insert(names.end(), {"downstream_opening_mm", "downstream_zero_head_mm"});
+  }
   if (s.downstream.kind == scenarios::DownstreamKind::weir) names.push_back("weir_crest_mm");
   auto all_have = [&](const char* column) {
     return !recordings.empty() &&

@@ -64,9 +64,11 @@ std::string parameter_names(const std::vector<Parameter>& catalog);
 
 // The set a laboratory does not know (docs/calibration.md): the head gate's free and submerged
 // discharge coefficients, the roughness of every pool, the downstream structure's setting (gate
-// opening, or weir crest) and an offset for every level sensor the recordings hold — except
-// y_up_mm when the recorded upstream level drives the replay. Geometry, bed slope, the actuator
-// and the pump are measured or specified and stay as they are unless --params names them.
+// opening, or weir crest), a downstream gate's zero-head regularisation (its law near zero head
+// differs from simulator to simulator and from canal to canal; docs/calibration.md) and an offset
+// for every level sensor the recordings hold — except y_up_mm when the recorded upstream level
+// drives the replay. Geometry, bed slope, the actuator and the pump are measured or specified and
+// stay as they are unless --params names them.
 std::vector<std::string> default_parameters(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
                                             bool upstream_replayed);
 

@@ -127,16 +127,17 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
 // default set alone cannot follow it (measured: cost 0.93 / 0.98 against 0.033, Cd free 0.60 /
 // 0.39 for 0.9); the scan after the first fit finds it and the default set is fitted with
 // sensor_delay_s. Measured (2026-11-26, the gate switching when its command does in truth and
-// model): delay −0.295 ± 0.035 s and +0.316 ± 0.027 s; roughness, opening and offsets within
-// 1.0 %, 0.13 % and 4.9 %; the discharge-coefficient pair along its valley (Cd free −2.9 % /
-// −6.1 %, Cd submerged +2.9 % / +5.8 %: docs/calibration.md). With the
+// model; downstream_zero_head_mm in the default set): delay −0.295 ± 0.036 s and +0.317 ± 0.031
+// s; roughness, opening and offsets within 1.1 %, 0.1 % and 3.4 %; the discharge-coefficient pair
+// along its valley (Cd free −4.3 % / −8.9 %, Cd submerged +5.1 % / +10.9 %: docs/calibration.md).
+// With the
 // parameters named, the offset is not fitted but the note says what to add.
 TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   const Scenario truth = perturbed_truth();
   const std::map<std::string, double> expected = {
       {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
       {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}};
+      {"offset_y_dwe_mm", -1.5}, {"downstream_zero_head_mm", 0.0}};  // the published law
   for (const double lead : {0.3, -0.3}) {
     const std::vector<Recording> recordings = record(truth, {"op1", "op2", "op3", "op4"}, 80.0, lead);
     const Calibration c = calibrate(model(), recordings, {}, CalibrateOptions{});
@@ -147,9 +148,11 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
     for (const ParameterEstimate& p : c.parameters) {
       const double want = p.name == "sensor_delay_s" ? -lead : expected.at(p.name);
       if (p.name.rfind("cd_", 0) == 0) {
-        // The pair slides along its valley (above): measured −2.9 % / −6.1 % (Cd free), +2.9 % /
-        // +5.8 % (Cd submerged).
-        EXPECT_LE(relative_error(p, want), 0.08) << lead << " " << p.name << " = " << p.value;
+        // The pair slides along its valley (above), within 2 std: measured with
+        // downstream_zero_head_mm in the default set (0.03 and 0 mm, the published law) −4.3 % /
+        // −8.9 % (Cd free, std 5.5 %), +5.1 % / +10.9 % (Cd submerged, std 8 %).
+        EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << lead << " " << p.name << " = " << p.value << " ± " << p.std;
+        EXPECT_LE(relative_error(p, want), 0.12) << lead << " " << p.name << " = " << p.value;
         continue;
       }
       EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << lead << " " << p.name << " = " << p.value << " ± " << p.std;
@@ -488,6 +491,33 @@ TEST(Calibrate, EstimatesStayWithinTheirBounds) {
   EXPECT_TRUE(c.parameters[0].at_bound);
 }
 
+// A parameter whose optimum lies at its bound — the downstream gate's zero-head regularisation,
+// 0 (Swamee's published law) in the truth — is held there once a step puts it on the bound, and
+// the others are fitted without it (levenberg_marquardt.cpp StopOnReachingABound). Held at 0 it
+// is the six-parameter model, so the fit must reach that model's optimum. Measured 2026-11-26:
+// cost 0.032746 in 228 simulations against the six parameters' 0.032898 in 132; before the hold,
+// Ceres alone projected every step onto the bound and crept: 420 simulations, 24 iterations, and
+// it stopped 11 % above the optimum (0.036460, Cd submerged 1.003 for the truth's 1.1).
+TEST(Calibrate, AParameterWhoseOptimumIsAtItsBoundIsHeldThere) {
+  CalibrateOptions o;
+  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.starts = 2;
+  o.grid_check = false;
+  const Calibration six = calibrate(model(), truth_recordings(), {}, o);
+  ASSERT_TRUE(six.ok) << six.message;
+  o.parameters.push_back("downstream_zero_head_mm");
+  const Calibration seven = calibrate(model(), truth_recordings(), {}, o);
+  ASSERT_TRUE(seven.ok) << seven.message;
+  const ParameterEstimate& zero_head = seven.parameters.back();
+  EXPECT_EQ(zero_head.value, 0.0);
+  EXPECT_TRUE(zero_head.at_bound);
+  EXPECT_EQ(seven.starts, 1) << seven.starts_note;
+  EXPECT_NE(seven.starts_note.find("converged"), std::string::npos) << seven.starts_note;
+  // The six-parameter optimum, to the runs' stopping resolution (a thousandth of the cost).
+  EXPECT_LE(seven.cost_after, six.cost_after * (1.0 + 1e-3)) << "six: " << six.cost_after;
+  EXPECT_LT(seven.simulations, 2 * six.simulations) << "six: " << six.simulations;
+}
+
 // A flume closed at its downstream end (the downstream gate shut) has no steady state with the
 // head gate open: the inflow has nowhere to go, and Newton cannot converge. Issue 12: a failed
 // steady state is never silent — here a warning naming the state the replay starts from instead,
@@ -561,11 +591,14 @@ TEST(Calibrate, AFailedSteadyStateWarnsOnStderrWhenNoOneListens) {
 
 TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
   // Held at a bound (the free-flow recordings want Cd free near 0.9): doubtful, so the second
-  // start runs; without a doubt (the six-parameter fit of the four recordings, which converges
+  // start runs. (60 iterations: the first run holds Cd free at 1, releases it where the gradient
+  // points inside, and creeps back to the bound in 57 iterations; at 30 it stops short, and the
+  // doubt is then "did not converge".) Without a doubt (the six-parameter fit of the four recordings, which converges
   // inside its bounds, every parameter determined, at a cost of 0.04) it does not.
   CalibrateOptions o;
   o.parameters = {"cd_free:1:1.2", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
   o.starts = 2;
+  o.max_iterations = 60;
   o.grid_check = false;
   const std::vector<Recording> recs(truth_recordings().begin() + 2, truth_recordings().end());
   const Calibration held = calibrate(model(), recs, {}, o);
