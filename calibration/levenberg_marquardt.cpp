@@ -232,33 +232,35 @@ Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_i
   out.z = z;
   // Each leg either holds a parameter more, or releases one never released before: at most 2p + 1.
   for (std::size_t leg_count = 0; leg_count <= 2 * p && out.iterations < max_iterations; ++leg_count) {
-    if (std::find(held.begin(), held.end(), false) == held.end()) break;
-    const Leg leg = solve_free(problem, z, held, released, max_iterations - out.iterations, progress_to, run, runs,
-                               function_tolerance, secant);
-    out.iterations += leg.iterations;
-    out.report = leg.report;
-    if (!std::isfinite(leg.cost)) break;
-    out.z = z;
-    out.cost = leg.cost;
-    out.converged = leg.converged;
-    if (!leg.reached.empty()) {
-      for (std::size_t j : leg.reached) held[j] = true;
-      out.converged = false;  // continued with the parameter held
-      continue;
+    if (std::find(held.begin(), held.end(), false) != held.end()) {
+      const Leg leg = solve_free(problem, z, held, released, max_iterations - out.iterations, progress_to, run, runs,
+                                 function_tolerance, secant);
+      out.iterations += leg.iterations;
+      out.report = leg.report;
+      if (!std::isfinite(leg.cost)) break;
+      out.z = z;
+      out.cost = leg.cost;
+      out.converged = leg.converged;
+      if (!leg.reached.empty()) {
+        for (std::size_t j : leg.reached) held[j] = true;
+        out.converged = false;  // continued with the parameter held
+        continue;
+      }
+      if (!leg.converged) break;
     }
-    if (!leg.converged || std::find(held.begin(), held.end(), true) == held.end()) break;
+    if (std::find(held.begin(), held.end(), true) == held.end()) break;
     std::vector<std::size_t> leaving;
     try {
       leaving = held_that_would_leave(problem, z, held);
     } catch (const std::exception&) {
       break;
     }
+    out.converged = leaving.empty();  // every held parameter pushes outwards: a bounded optimum
     if (leaving.empty()) break;
     for (std::size_t j : leaving) {
       held[j] = false;
       released[j] = true;  // from now on Ceres' projection keeps it within its bounds
     }
-    out.converged = false;
   }
   return out;
 }
