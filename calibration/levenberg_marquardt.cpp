@@ -140,6 +140,24 @@ struct Leg {
   double cost = std::numeric_limits<double>::infinity();
 };
 
+ceres::Solver::Options solver_options(int max_iterations, double function_tolerance) {
+  ceres::Solver::Options so;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = max_iterations;
+  so.num_threads = 1;  // the parallelism is in the simulations
+  so.logging_type = ceres::SILENT;
+  so.function_tolerance = function_tolerance;
+  so.parameter_tolerance = 1e-5;
+  so.gradient_tolerance = 1e-10;
+  // No projected line search on the bounds: Ceres would evaluate the Jacobian (a simulation per
+  // hydraulic parameter and recording) at every line-search point as well, which more than
+  // doubled the simulations; the bounds still hold, the step being projected onto them.
+  so.max_num_line_search_step_size_iterations = 0;
+  so.update_state_every_iteration = true;  // StopOnReachingABound reads the parameters
+  return so;
+}
+
 // One Ceres solve over the parameters not `held`, from z (updated in place); it stops when a
 // parameter not `released` before reaches a bound.
 Leg solve_free(ReplayProblem& problem, std::vector<double>& z, const std::vector<bool>& held,
@@ -166,20 +184,7 @@ Leg solve_free(ReplayProblem& problem, std::vector<double>& z, const std::vector
     lsq.SetParameterLowerBound(x.data(), static_cast<int>(k), low[k]);
     lsq.SetParameterUpperBound(x.data(), static_cast<int>(k), high[k]);
   }
-  ceres::Solver::Options so;
-  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = max_iterations;
-  so.num_threads = 1;  // the parallelism is in the simulations
-  so.logging_type = ceres::SILENT;
-  so.function_tolerance = function_tolerance;
-  so.parameter_tolerance = 1e-5;
-  so.gradient_tolerance = 1e-10;
-  // No projected line search on the bounds: Ceres would evaluate the Jacobian (a simulation per
-  // hydraulic parameter and recording) at every line-search point as well, which more than
-  // doubled the simulations; the bounds still hold, the step being projected onto them.
-  so.max_num_line_search_step_size_iterations = 0;
-  so.update_state_every_iteration = true;  // StopOnReachingABound reads x
+  ceres::Solver::Options so = solver_options(max_iterations, function_tolerance);
   IterationProgress progress(progress_to, run, runs, max_iterations);
   so.callbacks.push_back(&progress);
   StopAtTheModelsResolution resolution;
