@@ -1,8 +1,7 @@
 // One bounded Levenberg–Marquardt run of a calibration (Ceres Solver 2.1) on a ReplayProblem:
 // Jacobians by the problem's parallel forward differences, progress per iteration, a stop at the
 // model's resolution, and a parameter that reaches a bound held there while the gradient pushes it
-// outwards (levenberg_marquardt.cpp). calibrate.cpp decides where runs start and
-// which one is kept.
+// outwards (levenberg_marquardt.cpp). calibrate.cpp decides where runs start and which one is kept.
 #pragma once
 
 #include <limits>
