@@ -283,14 +283,15 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     // precisely only when it ends below the best so far (it mostly finds the same optimum, and
     // its tail iterations cost a simulation per hydraulic parameter and recording each).
     const int runs = o.starts;
-    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, kPreciseTolerance,
+    const double tolerance = from_coarser ? kRefinedGridTolerance : kPreciseTolerance;
+    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, tolerance,
                                   /*secant=*/from_coarser != nullptr);
     c.iterations += best.iterations;
     if (from_coarser && std::isfinite(best.cost) && !fit.differenced_at(best.z)) {
       // A refined grid starts near its optimum (the coarser grid's) and simulates at 4x the
       // cost: secant Jacobians carry the run there, and one with Jacobians by differences ends
       // it, so that its stopping rules and statistics see the true Jacobian.
-      Run finished = levenberg_marquardt(fit, best.z, o.max_iterations, o.progress, 0, runs, kPreciseTolerance);
+      Run finished = levenberg_marquardt(fit, best.z, o.max_iterations, o.progress, 0, runs, tolerance);
       c.iterations += finished.iterations;
       if (finished.cost <= best.cost) best = std::move(finished);
     }
