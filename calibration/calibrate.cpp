@@ -61,15 +61,43 @@ struct Handover {
   std::vector<Channels> twice_the_cells;
 };
 
+// The replays of one point on twice the cells, kept for the last point asked: the doubt about the
+// first run, the check whether a refinement follows and the grid check at the optimum ask for the
+// same point (four simulations on twice the cells each time before).
+class TwiceTheCells {
+ public:
+  explicit TwiceTheCells(ReplayProblem& problem) : problem_(problem) {}
+  // Before the sensors (what a refined grid starts from); throws when a simulation fails.
+  const std::vector<Channels>& truth_at(const std::vector<double>& z) { return replay(z).truth; }
+  const std::vector<Channels>& observed_at(const std::vector<double>& z) { return replay(z).observed; }
+
+ private:
+  struct Replayed {
+    std::vector<double> z;
+    std::vector<Channels> truth, observed;
+  };
+  const Replayed& replay(const std::vector<double>& z) {
+    if (!last_ || last_->z != z) {
+      const Scenario finer = twice_the_cells(problem_, z);
+      Replayed r{z, problem_.simulate_all(finer), {}};
+      r.observed = problem_.observe_all(r.truth, finer);
+      last_ = std::move(r);
+    }
+    return *last_;
+  }
+  ReplayProblem& problem_;
+  std::optional<Replayed> last_;
+};
+
 // Whether the first run's large cost is the grid's: twice the cells bring it below kDoubtfulCost,
 // and by enough that the grid will be refined. Another start on this grid would then search for
 // a basin the refined grid explains: on four lab recordings of an 800-cell truth the 100-cell fit
 // ends at 0.095 (0.033 on twice the cells), and a second start took the 100-cell pass from 116 to
 // 348 simulations to find the same optimum 0.17 % lower. One simulation per recording on twice the
 // cells; a failing one leaves the doubt.
-bool cost_is_the_grids(ReplayProblem& problem, const Run& run) {
+bool cost_is_the_grids(ReplayProblem& problem, TwiceTheCells& twice, const Run& run) {
   try {
-    const double refined = cost_per_sample(problem.residuals(problem.predict(twice_the_cells(problem, run.z))));
+    const double refined = cost_per_sample(problem.residuals(twice.observed_at(run.z)));
     return refined < kDoubtfulCost && refined < kRefineBelow * run.cost;
   } catch (const std::exception&) {
     return false;
@@ -85,12 +113,12 @@ bool cost_is_the_grids(ReplayProblem& problem, const Run& run) {
 // still creeping along the discharge coefficients' valley; a second start there took the
 // calibration from 716 to 1260 simulations, and the refined grids, continuing the first run,
 // reach the same optimum either way.
-std::string doubt(ReplayProblem& problem, const Run& run, bool refinable) {
+std::string doubt(ReplayProblem& problem, TwiceTheCells& twice, const Run& run, bool refinable) {
   const auto& params = problem.parameters();
   if (!std::isfinite(run.cost)) return "the first run found no usable solution";
   std::optional<bool> grids;  // whether the grid explains the cost (one simulation per recording)
   const auto the_grids = [&] {
-    if (!grids) grids = refinable && cost_is_the_grids(problem, run);
+    if (!grids) grids = refinable && cost_is_the_grids(problem, twice, run);
     return *grids;
   };
   if (!run.converged && !the_grids()) return "the first run did not converge";
@@ -257,6 +285,18 @@ ReplayOptions replay_for(const std::vector<Parameter>& parameters, const Calibra
   return replay;
 }
 
+// Whether a refinement follows a run that ended at `run`: `follows` on the grid check there. A
+// simulation that fails on twice the cells says no (the grid check at the optimum decides again).
+bool refinement_follows(ReplayProblem& fit, TwiceTheCells& twice, const Run& run, const RefinementFollows& follows) {
+  try {
+    const std::vector<Channels> at = fit.predict(run.z);
+    const double cost = cost_per_sample(fit.residuals(at));
+    return follows(grid_check(fit, twice.observed_at(run.z), at, cost), cost);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 // One calibration of the scenario's parameters named by `specs` (the recordings checked).
 Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording>& recordings,
                            const std::vector<Recording>& validation, const std::vector<std::string>& specs,
@@ -284,20 +324,30 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     // its tail iterations cost a simulation per hydraulic parameter and recording each).
     const int runs = o.starts;
     const double tolerance = from_coarser ? kRefinedGridTolerance : kPreciseTolerance;
-    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, tolerance,
+    TwiceTheCells twice(fit);
+    // A grid that may be refined scouts first: when twice the cells lower the cost at the scout's
+    // end by enough that the refinement follows, the refined grid continues from there (its
+    // optimum moves by more than this one's last precise iterations would). Measured on the
+    // benchmark's truth:1 (bench/README.md), the 100-cell run took 27 iterations (488
+    // simulations) to gain 5.6 % after its third, and the refined grids cut the cost 12-fold;
+    // it now stops after 13 (docs/calibration.md, "The first grid scouts").
+    const bool scouted = o.grid_check && static_cast<bool>(follows) && !from_coarser;
+    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, scouted ? kScoutTolerance : tolerance,
                                   /*secant=*/from_coarser != nullptr);
     c.iterations += best.iterations;
-    if (from_coarser && std::isfinite(best.cost) && !fit.differenced_at(best.z)) {
-      // A refined grid starts near its optimum (the coarser grid's) and simulates at 4x the
-      // cost: secant Jacobians carry the run there, and one with Jacobians by differences ends
-      // it, so that its stopping rules and statistics see the true Jacobian.
-      Run finished = levenberg_marquardt(fit, best.z, o.max_iterations, o.progress, 0, runs, tolerance);
+    const bool refinement_likely = scouted && std::isfinite(best.cost) && refinement_follows(fit, twice, best, follows);
+    if (!refinement_likely && std::isfinite(best.cost) && (scouted || (from_coarser && !fit.differenced_at(best.z)))) {
+      // Continued precisely, or, on a refined grid, which starts near its optimum (the coarser
+      // grid's) and simulates at 4x the cost, where secant Jacobians carried the run: ended with
+      // Jacobians by differences, so that its stopping rules and statistics see the true Jacobian.
+      const int left = scouted ? o.max_iterations - best.iterations : o.max_iterations;
+      Run finished = levenberg_marquardt(fit, best.z, left, o.progress, 0, runs, tolerance);
       c.iterations += finished.iterations;
       if (finished.cost <= best.cost) best = std::move(finished);
     }
     std::vector<Run> starts{Run{z0, c.cost_before, 0, "", false}};
     if (o.starts > 1) {
-      const std::string why = doubt(fit, best, static_cast<bool>(follows));
+      const std::string why = doubt(fit, twice, best, static_cast<bool>(follows));
       if (!o.further_starts_only_when_doubtful || !why.empty()) {
         c.starts_note = why.empty() ? "every start run (further_starts_only_when_doubtful off)"
                                     : "further starts run: " + why;
@@ -325,33 +375,37 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     }
     c.starts = static_cast<int>(starts.size());
     if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");
-    if (o.progress) o.progress({0.9, "statistics at the optimum"});
     const std::vector<Channels> optimum = fit.predict(best.z);
     const std::vector<double> r = fit.residuals(optimum);
     c.cost_after = cost_per_sample(r);
     c.solver_report = best.report;
-    const std::vector<double> J = fit.jacobian(best.z, r);
-    const ParameterStatistics stats = parameter_statistics(parameters, best.z, J, r, fit.residual_series(optimum));
-    c.inflation = stats.inflation;
-    c.correlation = stats.correlation;
-    for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
-    // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
-    std::vector<double> numerical(parameters.size(), 0.0);
+    bool refined_next = false;  // a calibration on twice the cells follows and replaces this one
+    if (o.grid_check) {
+      if (o.progress) o.progress({0.9, "grid check: the optimum on twice the cells"});
+      c.grid = grid_check(fit, twice.observed_at(best.z), optimum, c.cost_after);
+      refined_next = follows && follows(c.grid, c.cost_after);
+      if (refined_next && to_finer) to_finer->twice_the_cells = twice.truth_at(best.z);
+    }
+    // A grid that will be refined leaves its statistics, numerical uncertainty and validation to
+    // the refined one (its estimates are only that one's start): no Jacobian at its optimum.
     std::vector<double> values;
     for (std::size_t j = 0; j < parameters.size(); ++j) values.push_back(parameters[j].from_search(best.z[j]));
     std::vector<double> converged = values;
-    bool refined_next = false;  // a calibration on twice the cells follows and replaces this one
-    if (o.grid_check) {
-      if (o.progress) o.progress({0.91, "grid check: the optimum on twice the cells"});
-      const Scenario finer = twice_the_cells(fit, best.z);
-      std::vector<Channels> fine_truth = fit.simulate_all(finer);
-      const std::vector<Channels> fine = fit.observe_all(fine_truth, finer);
-      c.grid = grid_check(fit, fine, optimum, c.cost_after);
-      refined_next = follows && follows(c.grid, c.cost_after);
-      if (refined_next && to_finer) to_finer->twice_the_cells = std::move(fine_truth);
-      if (!refined_next) {
+    std::vector<double> numerical(parameters.size(), 0.0);
+    ParameterStatistics stats;
+    stats.std.assign(parameters.size(), 0.0);
+    stats.sensitivity.assign(parameters.size(), 0.0);
+    if (!refined_next) {
+      if (o.progress) o.progress({0.91, "statistics at the optimum"});
+      const std::vector<double> J = fit.jacobian(best.z, r);
+      stats = parameter_statistics(parameters, best.z, J, r, fit.residual_series(optimum));
+      c.inflation = stats.inflation;
+      c.correlation = stats.correlation;
+      for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
+      if (o.grid_check) {
+        // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
         if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
-        c.discretisation = discretisation_shifts(fit, best.z, J, 2, &fine);
+        c.discretisation = discretisation_shifts(fit, best.z, J, 2, &twice.observed_at(best.z));
         numerical = numerical_uncertainty(c.discretisation, parameters.size());
         converged = grid_converged(parameters, values, c.discretisation);
         for (auto& d : c.discretisation) d.at_optimum.clear();  // the result stays light (diagnosis keeps dozens)

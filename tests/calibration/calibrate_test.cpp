@@ -293,21 +293,39 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   for (const auto& p : refined.parameters) EXPECT_GT(p.grid_shift, 0.0) << p.name;
   // Written as `canalsim calibrate` writes it, the model holds the grid-converged estimates on
   // twice the cells only when they fit the fitted recordings better than the estimates on their
-  // own grid. Here they do not (measured: cost 0.0135 against 0.0128): the 200-cell estimates are
-  // written, and the note gives the three costs. (tests/cli/calibrate_test.cpp
-  // ARefinedGridIsWrittenIntoTheCalibratedScenario sees the other outcome.)
+  // own grid, and the note gives the costs compared. Here the two are within a hair of each other
+  // (measured: 0.0135 against 0.0128 on 2026-11-26; 0.0128 against 0.0128, the grid-converged
+  // model written, once the first grid's run became a scout), so either outcome obeys the rule;
+  // both are checked. (tests/cli/calibrate_test.cpp ARefinedGridIsWrittenIntoTheCalibratedScenario sees
+  // the grid-converged model written on a clear case.)
   o.write_grid_converged = true;
   const Calibration written = calibrate(model(), fitted, other, o);
   ASSERT_TRUE(written.ok) << written.message;
-  EXPECT_FALSE(written.written_grid_converged) << written.written_note;
-  EXPECT_EQ(written.calibrated.pools.front().cells, 200);
-  EXPECT_EQ(written.written_note.rfind("the estimates on 200 cells (the grid-converged ones: cost ", 0), 0u)
-      << written.written_note;
   ASSERT_EQ(written.parameters.size(), refined.parameters.size());
   for (std::size_t j = 0; j < written.parameters.size(); ++j) {
     EXPECT_DOUBLE_EQ(written.parameters[j].value, refined.parameters[j].value) << written.parameters[j].name;
   }
   EXPECT_DOUBLE_EQ(written.cost_after, refined.cost_after);
+  // The costs in the note: "... (cost A on 400 cells on the fitted recordings, against B with the
+  // estimates on 200 cells ...", three digits each (so compared within half a unit of the third):
+  // the model written is the one with the lower.
+  const std::size_t at = written.written_note.find("cost ");
+  ASSERT_NE(at, std::string::npos) << written.written_note;
+  const double converged_cost = std::stod(written.written_note.substr(at + 5));
+  const std::size_t against = written.written_note.find("against ");
+  ASSERT_NE(against, std::string::npos) << written.written_note;
+  EXPECT_NEAR(std::stod(written.written_note.substr(against + 8)), refined.cost_after, 0.005 * refined.cost_after)
+      << written.written_note;
+  if (written.written_grid_converged) {
+    EXPECT_EQ(written.calibrated.pools.front().cells, 400);
+    EXPECT_EQ(written.written_note.rfind("the grid-converged estimates on 400 cells (cost ", 0), 0u) << written.written_note;
+    EXPECT_LE(converged_cost, refined.cost_after * (1.0 + 0.005)) << written.written_note;
+  } else {
+    EXPECT_EQ(written.calibrated.pools.front().cells, 200);
+    EXPECT_EQ(written.written_note.rfind("the estimates on 200 cells (the grid-converged ones: cost ", 0), 0u)
+        << written.written_note;
+    EXPECT_GE(converged_cost, refined.cost_after * (1.0 - 0.005)) << written.written_note;
+  }
 }
 
 // While the grid still limits the model written — twice the last grid's cells cut the cost below
