@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "calibration/fits.hpp"
+#include "calibration/grid_check.hpp"
 #include "calibration/levenberg_marquardt.hpp"
 #include "calibration/time_offset.hpp"
 #include "calibration/warning_once.hpp"
@@ -59,34 +60,6 @@ using RefinementFollows = std::function<bool(const GridCheck& grid, double cost_
 // the cells (before the sensors), which its grid check made and where the refined one starts.
 struct Handover {
   std::vector<Channels> twice_the_cells;
-};
-
-// The replays of one point on twice the cells, kept for the last point asked: the doubt about the
-// first run, the check whether a refinement follows and the grid check at the optimum ask for the
-// same point (four simulations on twice the cells each time before).
-class TwiceTheCells {
- public:
-  explicit TwiceTheCells(ReplayProblem& problem) : problem_(problem) {}
-  // Before the sensors (what a refined grid starts from); throws when a simulation fails.
-  const std::vector<Channels>& truth_at(const std::vector<double>& z) { return replay(z).truth; }
-  const std::vector<Channels>& observed_at(const std::vector<double>& z) { return replay(z).observed; }
-
- private:
-  struct Replayed {
-    std::vector<double> z;
-    std::vector<Channels> truth, observed;
-  };
-  const Replayed& replay(const std::vector<double>& z) {
-    if (!last_ || last_->z != z) {
-      const Scenario finer = twice_the_cells(problem_, z);
-      Replayed r{z, problem_.simulate_all(finer), {}};
-      r.observed = problem_.observe_all(r.truth, finer);
-      last_ = std::move(r);
-    }
-    return *last_;
-  }
-  ReplayProblem& problem_;
-  std::optional<Replayed> last_;
 };
 
 // Whether the first run's large cost is the grid's: twice the cells bring it below kDoubtfulCost,
@@ -177,42 +150,6 @@ std::vector<Run> screened_starts(ReplayProblem& problem, int count) {
   }
   std::sort(out.begin(), out.end(), [](const Run& a, const Run& b) { return a.cost < b.cost; });
   return out;
-}
-
-// The optimum re-simulated on a grid with `factor` times the cells of every pool (`fine`, the
-// first prediction of the re-estimate on twice the cells): how much the levels and the cost move.
-GridCheck grid_check(const ReplayProblem& problem, const std::vector<Channels>& fine,
-                     const std::vector<Channels>& at_optimum, double cost) {
-  GridCheck g;
-  g.done = true;
-  g.cost = cost;
-  g.refined_cost = cost_per_sample(problem.residuals(fine));
-  double change = 0.0, residual = 0.0;
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < fine.size(); ++i) {
-    for (const auto& [channel, y] : problem.replays()[i].data) {
-      if (!is_level(channel) || !fine[i].count(channel)) continue;
-      const auto& a = at_optimum[i].at(channel);
-      const auto& f = fine[i].at(channel);
-      for (std::size_t k = 0; k < y.size(); ++k) {
-        change += (f[k] - a[k]) * (f[k] - a[k]);
-        residual += (y[k] - a[k]) * (y[k] - a[k]);
-        ++n;
-      }
-    }
-  }
-  g.rms_change = n ? std::sqrt(change / static_cast<double>(n)) : 0.0;
-  g.residual_rms = n ? std::sqrt(residual / static_cast<double>(n)) : 0.0;
-  const double relative = g.cost > 0.0 ? (g.refined_cost - g.cost) / g.cost : 0.0;
-  if (g.rms_change > 0.5 * g.residual_rms) {
-    g.verdict = "the grid limits the fit: twice the cells move the levels by " + format_g(g.rms_change, 3) +
-                " mm RMS, comparable with the residual (" + format_g(g.residual_rms, 3) + " mm)";
-  } else {
-    g.verdict = "the grid does not limit the fit: twice the cells move the levels by " + format_g(g.rms_change, 3) +
-                " mm RMS against a residual of " + format_g(g.residual_rms, 3) + " mm (cost " +
-                (relative >= 0 ? "+" : "") + format_fixed(100.0 * relative, 1) + " %)";
-  }
-  return g;
 }
 
 // Recordings of another canal: a `scenario` metadata line naming another canal, or levels the
