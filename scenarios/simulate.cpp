@@ -25,6 +25,11 @@ namespace {
 constexpr double kMm = 1e-3;
 constexpr double kSettledDepth = 1e-6;      // m, per chunk of marching (settled)
 constexpr double kSettledDischarge = 1e-6;  // of the largest discharge, per chunk
+constexpr int kMarchingChunks = 20;         // of a march that settles the canal
+// Of the largest discharge, per chunk, for a stalled Newton: settled()'s depth criterion relative
+// to the lab's ~50 mm depths (2e-5), halved. kSettledDischarge is twenty times stricter than that,
+// and stalls whose depths are steady to 1/100 of kSettledDepth exceed it by 1.1-1.9 times.
+constexpr double kStalledDischarge = 1e-5;
 
 
 solver::SolverOptions solver_options(const NumericsSpec& n) {
@@ -416,10 +421,32 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
   std::string newton_failure;
   if (options.use_steady_state_solver) {
     solver::SteadyStateOptions steady;
+    // Solved early enough that its continuation marches end before the input starts: they march
+    // with the boundaries running, and one that reached t > 0 settled the canal under the
+    // experiment's first commands (the lab's op1 on 400 cells with minmod started at 0.61 L/s,
+    // the steady flow of the PRBS's 20 mm, instead of the operating point's 0.48 L/s).
+    const double solve_at = before_input - solver::continuation_span(b.canal, steady);
+    b.canal.set_time(solve_at);
+    b.controlled->reset(solve_at, b.controlled->command(solve_at));
     steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
+    // A Newton stalled by a limiter's kinks (solver/steady_state.hpp) is accepted when no depth
+    // changes faster than the time marching that replaces a failed Newton accepts as settled
+    // (settled(): kSettledDepth per chunk), and no discharge by more than kStalledDischarge per
+    // chunk: the march would start further away and take 120-330 s of marching (the lab on 400
+    // cells with minmod) to get there. Measured stalls of the lab on 200-800 cells: depths
+    // 2e-10 to 7e-9 m/s (1/5000 to 1/5 of the bound), discharges 1e-6 to 9e-6 per chunk.
+    const double fallback_chunk_s = std::max({options.settle_time, e.settle_s, 0.0}) / kMarchingChunks;
+    if (fallback_chunk_s > 0.0) {
+      steady.stalled_depth_rate = std::min(kSettledDepth / fallback_chunk_s, 1e-3);
+      steady.stalled_discharge_rate = std::min(kStalledDischarge / fallback_chunk_s, 1e-3);
+    }
     const auto summary = solver::solve_steady_state(b.canal, steady);
+    b.canal.set_time(before_input);
+    b.controlled->reset(before_input, b.controlled->command(before_input));
     if (summary.status) {
-      result.description = "steady state (Newton, " + std::to_string(summary.iterations) + " iterations)";
+      result.description = "steady state (Newton, " + std::to_string(summary.iterations) + " iterations" +
+                           (summary.stalled ? "; " + summary.stall + ", every depth changing by less than " +
+                                                  format_g(summary.max_depth_rate, 2) + " m/s" : "") + ")";
     } else {
       newton_failure = summary.status.message();
     }
@@ -453,15 +480,15 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
     const bool until_settled = !solved;
     MarchedState before = marched_state(b.canal);
     int settled_chunks = 0;
-    for (int k = 1; k <= 20; ++k) {
-      march_to(b.canal, -marching + marching * k / 20.0, guard, "settling");
-      report(result.progress_weight * k / 20.0);
+    for (int k = 1; k <= kMarchingChunks; ++k) {
+      march_to(b.canal, -marching + marching * k / kMarchingChunks, guard, "settling");
+      report(result.progress_weight * k / kMarchingChunks);
       if (!until_settled) continue;
       MarchedState now = marched_state(b.canal);
       settled_chunks = settled(before, now) ? settled_chunks + 1 : 0;
       before = std::move(now);
-      if (settled_chunks >= 2 && k < 20 && marching * k / 20.0 >= e.settle_s) {
-        marched_s = marching * k / 20.0;
+      if (settled_chunks >= 2 && k < kMarchingChunks && marching * k / kMarchingChunks >= e.settle_s) {
+        marched_s = marching * k / kMarchingChunks;
         report(result.progress_weight);
         break;
       }

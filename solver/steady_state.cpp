@@ -277,6 +277,12 @@ Status SteadyStateOptions::validate() const {
     return Status::error("SteadyStateOptions.depth_tolerance = " + std::to_string(depth_tolerance) +
                          ": expected a value in (0, 0.01] m");
   }
+  for (const double rate : {stalled_depth_rate, stalled_discharge_rate}) {
+    if (!(rate >= 0.0 && rate <= 1e-3)) {
+      return Status::error("SteadyStateOptions.stalled_depth_rate / stalled_discharge_rate = " + std::to_string(rate) +
+                           ": expected a value in [0, 1e-3]");
+    }
+  }
   if (max_iterations < 1 || max_iterations > 1000) {
     return Status::error("SteadyStateOptions.max_iterations = " + std::to_string(max_iterations) +
                          ": expected an integer in [1, 1000]");
@@ -290,6 +296,28 @@ Status SteadyStateOptions::validate() const {
                          std::to_string(continuation_attempts) + ": expected an integer in [0, 20]");
   }
   return Status::ok();
+}
+
+// The largest |dh/dt| [m/s] and |dQ/dt| [m³/s²] of the canal's state, into `summary`.
+static void measure_rates(Canal& canal, Problem& problem, SteadyStateSummary& summary) {
+  canal.evaluate_rates(problem.time, problem.rates);
+  std::size_t c = 0;
+  for (int r = 0; r < canal.reach_count(); ++r) {
+    const Reach& reach = canal.reach(r);
+    for (int i = 0; i < reach.cells(); ++i, ++c) {
+      const double top = reach.section().top_width(reach.depth(i));
+      summary.max_depth_rate = std::max(summary.max_depth_rate, std::abs(problem.rates[2 * c]) / top);
+      summary.max_discharge_rate = std::max(summary.max_discharge_rate, std::abs(problem.rates[2 * c + 1]));
+    }
+  }
+}
+
+static double largest_discharge(const Canal& canal) {
+  double q = 0.0;
+  for (int r = 0; r < canal.reach_count(); ++r) {
+    for (double qi : canal.reach(r).discharge()) q = std::max(q, std::abs(qi));
+  }
+  return q;
 }
 
 // One Newton solve from the canal's current state.
@@ -359,24 +387,22 @@ static SteadyStateSummary newton(Canal& canal, const SteadyStateOptions& options
   long iterations = 0;
   KINGetNumNonlinSolvIters(kin.get(), &iterations);
   summary.iterations = static_cast<int>(iterations);
-  if (flag < 0) {
-    load_state(canal, initial.data());
-    summary.status = Status::error("steady state not found after " + std::to_string(iterations) +
-                                   " Newton iterations: " + kinsol_message(flag));
-  } else {
-    load_state(canal, N_VGetArrayPointer(u));
-    canal.evaluate_rates(problem.time, problem.rates);
-    std::size_t c = 0;
-    for (int r = 0; r < canal.reach_count(); ++r) {
-      const Reach& reach = canal.reach(r);
-      for (int i = 0; i < reach.cells(); ++i, ++c) {
-        const double top = reach.section().top_width(reach.depth(i));
-        summary.max_depth_rate = std::max(summary.max_depth_rate, std::abs(problem.rates[2 * c]) / top);
-        summary.max_discharge_rate = std::max(summary.max_discharge_rate, std::abs(problem.rates[2 * c + 1]));
-      }
-    }
-  }
   summary.residual_evaluations = problem.evaluations;
+  // KINSOL iterates in place: u holds the solution, or the last iterate when it failed (which a
+  // stalled_depth_rate may accept).
+  const bool usable = (flag >= 0 || options.stalled_depth_rate > 0.0) && load_state(canal, N_VGetArrayPointer(u));
+  if (usable) measure_rates(canal, problem, summary);
+  if (flag >= 0) return summary;
+  if (usable && summary.max_depth_rate <= options.stalled_depth_rate &&
+      summary.max_discharge_rate <= options.stalled_discharge_rate * largest_discharge(canal)) {
+    summary.stalled = true;
+    summary.stall = "the last attempt stalled after " + std::to_string(iterations) + " iterations: " + kinsol_message(flag);
+    return summary;
+  }
+  load_state(canal, initial.data());
+  summary.max_depth_rate = summary.max_discharge_rate = 0.0;
+  summary.status = Status::error("steady state not found after " + std::to_string(iterations) +
+                                 " Newton iterations: " + kinsol_message(flag));
   return summary;
 }
 
@@ -412,6 +438,25 @@ bool try_shooting_guess(Canal& canal) {
 
 }  // namespace
 
+// The longest reach's wave-crossing time L / sqrt(g h_max) in the canal's state (h_max >= 1 mm).
+static double longest_crossing(const Canal& canal) {
+  double crossing = 0.0;
+  for (int r = 0; r < canal.reach_count(); ++r) {
+    const Reach& reach = canal.reach(r);
+    double depth = 1e-3;
+    for (int i = 0; i < reach.cells(); ++i) depth = std::max(depth, reach.depth(i));
+    crossing = std::max(crossing, reach.length() / std::sqrt(canal.options().gravity * depth));
+  }
+  return crossing;
+}
+
+// Each continuation march lasts this many crossing times of the longest reach.
+constexpr double kCrossingsPerMarch = 3.0;
+
+double continuation_span(const Canal& canal, const SteadyStateOptions& options) {
+  return options.continuation_attempts * kCrossingsPerMarch * longest_crossing(canal);
+}
+
 SteadyStateSummary solve_steady_state(Canal& canal, const SteadyStateOptions& options) {
   SteadyStateSummary summary;
   if (summary.status = options.validate(); !summary.status) return summary;
@@ -420,18 +465,12 @@ SteadyStateSummary solve_steady_state(Canal& canal, const SteadyStateOptions& op
   // small, so when it fails, march a few wave-crossing times of the longest reach towards the
   // steady state and try again (Kelley & Keyes 1998). Marching advances boundary states
   // (reservoirs, actuators) as any run would.
-  double crossing = 0.0;
-  for (int r = 0; r < canal.reach_count(); ++r) {
-    const Reach& reach = canal.reach(r);
-    double depth = 1e-3;
-    for (int i = 0; i < reach.cells(); ++i) depth = std::max(depth, reach.depth(i));
-    crossing = std::max(crossing, reach.length() / std::sqrt(canal.options().gravity * depth));
-  }
+  const double crossing = longest_crossing(canal);
   const double start_time = canal.time();
   int iterations = 0, evaluations = 0;
   for (int attempt = 0; attempt <= options.continuation_attempts; ++attempt) {
     if (attempt > 0) {
-      const Status marched = canal.advance_to(canal.time() + 3.0 * crossing);
+      const Status marched = canal.advance_to(canal.time() + kCrossingsPerMarch * crossing);
       if (!marched) {
         summary.status = marched;
         break;
@@ -443,7 +482,11 @@ SteadyStateSummary solve_steady_state(Canal& canal, const SteadyStateOptions& op
       store_state(canal, before.data());
     }
     const bool guessed = attempt == 0 && options.first_guess && try_shooting_guess(canal);
-    summary = newton(canal, options, guessed ? options.iterations_per_jacobian : 1);
+    // A stall is accepted only before any march: a march moves the boundaries' own states (a
+    // reservoir's level drifts from its set point), which a steady canal then starts from.
+    SteadyStateOptions this_attempt = options;
+    if (attempt > 0) this_attempt.stalled_depth_rate = this_attempt.stalled_discharge_rate = 0.0;
+    summary = newton(canal, this_attempt, guessed ? options.iterations_per_jacobian : 1);
     // A failed Newton from the guess leaves the caller's state, not the guess, to continue from.
     if (!summary.status && guessed) load_state(canal, before.data());
     iterations += summary.iterations;

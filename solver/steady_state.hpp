@@ -10,6 +10,8 @@
 // the stage state), so the result is the state long time marching converges to.
 #pragma once
 
+#include <string>
+
 #include "solver/canal.hpp"
 #include "solver/status.hpp"
 
@@ -29,6 +31,16 @@ struct SteadyStateOptions {
   // shooting guess, range [1, 100]: 1 is Newton's method, more is modified Newton (a Jacobian
   // costs 2·5 residual evaluations). From any other start every iteration gets a fresh Jacobian.
   int iterations_per_jacobian = 3;
+  // A Newton that stalls short of depth_tolerance is accepted when its last iterate changes no
+  // depth faster than this [m/s] and no discharge faster than stalled_discharge_rate × the
+  // largest |Q| [1/s]; 0 (the default) never accepts one. The generalised minmod limiter stalls
+  // it: on a nearly straight profile its one-sided slopes tie in many cells and switch branch
+  // under the smallest change, so the residual has kinks everywhere and the line search fails
+  // near the solution (the lab on 200-800 cells: scaled residual 2e-9 to 5e-9 after 60 Newton
+  // iterations, where van Leer's reaches 2e-14 in 3). Only the first attempt's stall is accepted
+  // (before any continuation march). Range [0, 1e-3] each.
+  double stalled_depth_rate = 0.0;
+  double stalled_discharge_rate = 0.0;
   Status validate() const;
 };
 
@@ -38,12 +50,22 @@ struct SteadyStateSummary {
   int residual_evaluations = 0;
   double max_depth_rate = 0.0;      // max |dh/dt| at the solution [m/s]
   double max_discharge_rate = 0.0;  // max |dQ/dt| at the solution [m³/s²]
+  // The solution is a stalled Newton's last iterate, accepted by SteadyStateOptions::stalled_*
+  // (status ok; `stall` says where Newton stopped).
+  bool stalled = false;
+  std::string stall;
 };
 
 // Replaces the canal's state by the steady state near it (the current state is the first guess)
 // at the canal's current time. Boundaries are evaluated at that time; they advance only during
-// continuation marches (see continuation_attempts). On failure the state is the last attempt's
+// continuation marches (see continuation_attempts and continuation_span). On failure the state is the last attempt's
 // starting point.
 SteadyStateSummary solve_steady_state(Canal& canal, const SteadyStateOptions& options = {});
+
+// How far past the canal's current time solve_steady_state's continuation marches may advance it
+// [s], for the canal's current state. A caller whose boundaries change at some later time (an
+// experiment's input starting at t = 0) solves at least this long before it, so that every
+// attempt sees the boundaries held.
+double continuation_span(const Canal& canal, const SteadyStateOptions& options = {});
 
 }  // namespace canalsim::solver

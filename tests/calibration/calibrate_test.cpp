@@ -77,6 +77,19 @@ const std::vector<Recording>& truth_recordings() {
 
 double relative_error(const ParameterEstimate& p, double truth) { return std::abs(p.value - truth) / std::abs(truth); }
 
+// For two parameters searched in log whose estimates correlate strongly, the error of the
+// combination the recordings determine (calibration/statistics.cpp): ln a + k ln b with
+// k = −sign(ρ) σ_ln a / σ_ln b, the statistical stds of the logarithms. `converged`: of the
+// grid-converged estimates, else of the model's own.
+double determined_log_combination_error(const Calibration& c, std::size_t a, std::size_t b, double truth_a,
+                                        double truth_b, bool converged) {
+  const ParameterEstimate& pa = c.parameters[a];
+  const ParameterEstimate& pb = c.parameters[b];
+  const double k = -(c.correlation[a][b] > 0.0 ? 1.0 : -1.0) * (pa.statistical_std / pa.value) / (pb.statistical_std / pb.value);
+  const double va = converged ? pa.converged : pa.value, vb = converged ? pb.converged : pb.value;
+  return (std::log(va) + k * std::log(vb)) - (std::log(truth_a) + k * std::log(truth_b));
+}
+
 TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRecordings) {
   CalibrateOptions o;
   o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
@@ -193,10 +206,23 @@ TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTim
       {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
       {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
       {"offset_y_dwe_mm", -1.5}};
+  // The discharge-coefficient pair is named not identifiable (measured 2026-11-27: |correlation|
+  // 0.971); what these recordings determine is its combination (the issue: "named, with the
+  // combination that is determined instead"), which comes within 5 % (measured: 1.4 %, while
+  // the pair itself slides along its valley to Cd free +9.8 %, Cd submerged −14.1 %).
+  const auto is_cd = [](const std::string& name) { return name == "cd_free" || name == "cd_submerged"; };
+  const std::size_t free = 0, submerged = 1;
+  ASSERT_EQ(c.parameters[free].name, "cd_free");
+  ASSERT_EQ(c.parameters[submerged].name, "cd_submerged");
+  ASSERT_FALSE(c.identifiability.empty());
+  EXPECT_EQ(c.identifiability.front().parameters, (std::vector<std::string>{"cd_free", "cd_submerged"}));
+  EXPECT_LT(std::abs(determined_log_combination_error(c, free, submerged, 0.9, 1.1, true)), std::log(1.05));
   for (const ParameterEstimate& p : c.parameters) {
     const double want = expected.at(p.name);
     EXPECT_LE(std::abs(p.converged - want), 2.0 * p.std) << p.name << " converged " << p.converged << " ± " << p.std;
-    EXPECT_LE(std::abs(p.converged - want), 0.05 * std::abs(want)) << p.name << " converged " << p.converged;
+    if (!is_cd(p.name)) {
+      EXPECT_LE(std::abs(p.converged - want), 0.05 * std::abs(want)) << p.name << " converged " << p.converged;
+    }
     if (p.name == "offset_y_dwe_mm") {
       EXPECT_GT(relative_error(p, want), 0.05) << "the model's own estimate: " << p.value;
       EXPECT_LT(std::abs(p.converged - want), 0.5 * std::abs(p.value - want)) << p.value << " -> " << p.converged;

@@ -99,6 +99,82 @@ TEST(SteadyState, NoSteadyStateIsAReturnedFailureThatKeepsTheState) {
   EXPECT_EQ(canal.reach(0).area(), before);
 }
 
+// The bump channel with the generalised minmod limiter: on 400 cells its one-sided slopes tie
+// along the nearly straight profile and Newton stalls at the kinks short of its tolerance (on 150
+// to 300 cells it converges).
+Canal minmod_bump_channel(double inflow = 4.42) {
+  SolverOptions o;
+  o.limiter = Limiter::generalised_minmod;
+  o.cfl = 0.45;  // below minmod's limit cycle (docs/numerics.md)
+  Canal canal(o);
+  EXPECT_TRUE(canal.add_reach(bump_channel(400)));
+  EXPECT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(inflow)));
+  EXPECT_TRUE(canal.set_boundary(0, End::downstream, FixedLevelBoundary::depth(2.0)));
+  return canal;
+}
+
+TEST(SteadyState, AStallAtMinmodsKinksIsAcceptedOnlyWithinTheBoundsAskedFor) {
+  SteadyStateOptions strict;
+  strict.continuation_attempts = 0;
+  Canal refused = minmod_bump_channel();
+  const std::vector<double> before = refused.reach(0).area();
+  const auto failure = solve_steady_state(refused, strict);
+  ASSERT_FALSE(failure.status) << "Newton converged: this canal no longer shows the stall";
+  EXPECT_EQ(refused.reach(0).area(), before);  // a stall not asked for is a failure that keeps the state
+
+  SteadyStateOptions tolerant = strict;
+  tolerant.stalled_depth_rate = 1e-6;  // measured stall: 1.0e-7 m/s, 2.8e-7 m³/s² (6.4e-8 of Q per s)
+  tolerant.stalled_discharge_rate = 1e-6;
+  Canal newton = minmod_bump_channel();
+  const auto summary = solve_steady_state(newton, tolerant);
+  ASSERT_TRUE(summary.status) << summary.status.message();
+  EXPECT_TRUE(summary.stalled);
+  EXPECT_NE(summary.stall.find("stalled after"), std::string::npos) << summary.stall;
+  EXPECT_LE(summary.max_depth_rate, tolerant.stalled_depth_rate);
+  // That it is where time marching goes: Simulate.AStalledSteadyStateStartsWhereTheMarchWould
+  // (tests/scenarios/simulate_test.cpp), on the lab canal.
+
+  // A bound the stall does not meet is a failure, as without one.
+  SteadyStateOptions too_strict = strict;
+  too_strict.stalled_depth_rate = 1e-30;
+  too_strict.stalled_discharge_rate = 1e-30;
+  Canal again = minmod_bump_channel();
+  EXPECT_FALSE(solve_steady_state(again, too_strict).status);
+  EXPECT_EQ(again.reach(0).area(), before);
+}
+
+// Continuation marches run the boundaries: one whose inflow changes at t = 100 s must be solved
+// at least continuation_span before it for every attempt to see the inflow before the change.
+TEST(SteadyState, ContinuationMarchesStayWithinTheirSpan) {
+  const double change_at = 100.0, before_change = 2.0, after_change = 4.42;
+  auto canal_with_changing_inflow = [&] {
+    Canal canal;
+    EXPECT_TRUE(canal.add_reach(bump_channel(50)));
+    const auto inflow = [&](double t) { return t < change_at ? before_change : after_change; };
+    EXPECT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<FixedDischargeBoundary>(inflow)));
+    EXPECT_TRUE(canal.set_boundary(0, End::downstream, FixedLevelBoundary::depth(2.0)));
+    return canal;
+  };
+  SteadyStateOptions options;
+  options.first_guess = false;
+  options.max_iterations = 1;  // every attempt but a late one fails: the marches must happen
+  options.continuation_attempts = 20;
+  const auto steady_discharge = [&](double start) {
+    Canal canal = canal_with_changing_inflow();
+    canal.set_time(start);
+    const auto summary = solve_steady_state(canal, options);
+    EXPECT_TRUE(summary.status) << summary.status.message();
+    EXPECT_EQ(canal.time(), start);
+    return canal.reach(0).discharge().front();
+  };
+  Canal probe = canal_with_changing_inflow();
+  const double span = continuation_span(probe, options);
+  ASSERT_GT(span, 0.0);
+  EXPECT_NEAR(steady_discharge(change_at - span - 1e-9), before_change, 1e-3);
+  // The same solve started just before the change settles on the inflow after it.
+  EXPECT_NEAR(steady_discharge(change_at - 1e-9), after_change, 1e-3);
+}
+
 TEST(SteadyState, InvalidOptionsNameTheField) {
   SteadyStateOptions options;
   options.depth_tolerance = -1.0;
@@ -106,6 +182,9 @@ TEST(SteadyState, InvalidOptionsNameTheField) {
   options = {};
   options.max_iterations = 0;
   EXPECT_NE(options.validate().message().find("max_iterations"), std::string::npos);
+  options = {};
+  options.stalled_depth_rate = -1e-9;
+  EXPECT_NE(options.validate().message().find("stalled_depth_rate"), std::string::npos);
 }
 
 // An offtake at the end face of a horizontal, frictionless channel (inflow Q_in upstream, level
