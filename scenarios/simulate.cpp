@@ -420,7 +420,7 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
   b.controlled->reset(before_input, b.controlled->command(before_input));
   std::string newton_failure;
   if (options.use_steady_state_solver) {
-    solver::SteadyStateOptions steady;
+    const solver::SteadyStateOptions steady = initial_steady_state_options(s, e, options);
     // Solved early enough that its continuation marches end before the input starts: they march
     // with the boundaries running, and one that reached t > 0 settled the canal under the
     // experiment's first commands (the lab's op1 on 400 cells with minmod started at 0.61 L/s,
@@ -428,18 +428,6 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
     const double solve_at = before_input - solver::continuation_span(b.canal, steady);
     b.canal.set_time(solve_at);
     b.controlled->reset(solve_at, b.controlled->command(solve_at));
-    steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
-    // A Newton stalled by a limiter's kinks (solver/steady_state.hpp) is accepted when no depth
-    // changes faster than the time marching that replaces a failed Newton accepts as settled
-    // (settled(): kSettledDepth per chunk), and no discharge by more than kStalledDischarge per
-    // chunk: the march would start further away and take 120-330 s of marching (the lab on 400
-    // cells with minmod) to get there. Measured stalls of the lab on 200-800 cells: depths
-    // 2e-10 to 7e-9 m/s (1/5000 to 1/5 of the bound), discharges 1e-6 to 9e-6 per chunk.
-    const double fallback_chunk_s = std::max({options.settle_time, e.settle_s, 0.0}) / kMarchingChunks;
-    if (fallback_chunk_s > 0.0) {
-      steady.stalled_depth_rate = std::min(kSettledDepth / fallback_chunk_s, 1e-3);
-      steady.stalled_discharge_rate = std::min(kStalledDischarge / fallback_chunk_s, 1e-3);
-    }
     const auto summary = solver::solve_steady_state(b.canal, steady);
     b.canal.set_time(before_input);
     b.controlled->reset(before_input, b.controlled->command(before_input));
@@ -505,6 +493,24 @@ InitialState settle(BuiltCanal& b, const Scenario& s, const ExperimentSpec& e, c
 }
 
 }  // namespace
+
+solver::SteadyStateOptions initial_steady_state_options(const Scenario& s, const ExperimentSpec& e,
+                                                        const SimulateOptions& options) {
+  solver::SteadyStateOptions steady;
+  steady.depth_tolerance = std::max(1e-12, 1e-2 * s.numerics.steady_tolerance_m);
+  // A Newton stalled by a limiter's kinks (solver/steady_state.hpp) is accepted when no depth
+  // changes faster than the time marching that replaces a failed Newton accepts as settled
+  // (settled(): kSettledDepth per chunk), and no discharge by more than kStalledDischarge per
+  // chunk: the march would start further away and take 120-330 s of marching (the lab on 400
+  // cells with minmod) to get there. Measured stalls of the lab on 200-800 cells: depths
+  // 2e-10 to 7e-9 m/s (1/5000 to 1/5 of the bound), discharges 1e-6 to 9e-6 per chunk.
+  const double fallback_chunk_s = std::max({options.settle_time, e.settle_s, 0.0}) / kMarchingChunks;
+  if (fallback_chunk_s > 0.0) {
+    steady.stalled_depth_rate = std::min(kSettledDepth / fallback_chunk_s, 1e-3);
+    steady.stalled_discharge_rate = std::min(kStalledDischarge / fallback_chunk_s, 1e-3);
+  }
+  return steady;
+}
 
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
   const SensorSpec sensors = e.sensors.value_or(s.sensors);

@@ -19,6 +19,7 @@
 #include "scenarios/scenario.hpp"
 #include "scenarios/signals.hpp"
 #include "solver/canal.hpp"
+#include "solver/steady_state.hpp"
 
 namespace canalsim::scenarios {
 
@@ -104,6 +105,13 @@ BuiltCanal build_canal(const Scenario& scenario, const ExperimentSpec& experimen
 // recording's u_mm when given (resting before t = 0 at the recording's operating point).
 SignalPtr command_input(const ExperimentSpec& experiment, const Drive& drive);
 std::function<double(double)> command_signal(const ExperimentSpec& experiment, const Drive& drive);
+
+// The options of the steady-state solve an experiment starts from: the scenario's tolerance, and
+// a Newton stalled at a limiter's kinks accepted when no depth changes faster than the time
+// marching that replaces a failed Newton accepts as settled (docs/numerics.md, "Stalls at the
+// limiter's kinks"). `canalsim linearize` solves its operating point with them too.
+solver::SteadyStateOptions initial_steady_state_options(const Scenario& scenario, const ExperimentSpec& experiment,
+                                                        const SimulateOptions& options = {});
 
 // Runs one experiment and returns its recording (columns t_s, u_mm, x_up_mm, y_up_mm, y_dw_mm,
 // y_dwe_mm, q_lps, regime; the regime by the paper's conditions (8)/(10) on the true levels).
