@@ -87,7 +87,9 @@ struct SimulateOptions {
   bool allow_long_run = false;
   // When Newton fails: throw std::runtime_error naming the failure (true), or march for (at most)
   // settle_time with the command held at its operating point and warn, naming the state the
-  // experiment then starts from (false). Never silent.
+  // experiment then starts from (false). Never silent. A Newton stalled at a limiter's kinks
+  // within initial_steady_state_options' bounds has not failed: the recording's initial_state
+  // metadata names the stall.
   bool require_steady_state = false;
   // Receives the failed-steady-state warning (one line, without the "canalsim: warning: "
   // prefix); unset, it is printed to stderr.
