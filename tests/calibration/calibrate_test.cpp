@@ -114,7 +114,8 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
     // +0.7 %, opening +0.16 %, offsets +3.0 % and +6.6 % (of |truth|). That offset is 0.10 mm off,
     // half its std: the downstream level trades it against the downstream opening (Q ∝ a √h at
     // fixed Q gives dh/da = −2h/a, about −4 here: the opening's 0.03 mm is 0.1 mm of level), and
-    // 100 cells reproduce a 200-cell truth with another limiter only up to such a trade.
+    // 100 cells reproduce a 200-cell truth with another limiter only up to such a trade. Longer
+    // recordings calibrated with grid refinement meet the bar for all six (the test after next).
     EXPECT_LE(relative_error(p, want), p.name == "offset_y_dwe_mm" ? 0.07 : 0.05) << p.name << " = " << p.value;
     // Re-estimated on twice the cells — the truth's grid, with the model's limiter and
     // Courant number — all six come within 1 % (measured: at most 0.3 %): what is left above is
@@ -190,6 +191,41 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   ASSERT_EQ(c.time_offset_note.rfind(lag, 0), 0u) << c.time_offset_note;
   EXPECT_NEAR(std::stod(c.time_offset_note.substr(lag.size())), 0.3, 0.05) << c.time_offset_note;
   EXPECT_NE(c.time_offset_note.find("not fitted"), std::string::npos) << c.time_offset_note;
+}
+
+// The bar met by the model's own estimates: the six parameters perturbed at once, the
+// truth on four times the cells (minmod, Courant 0.45), realistic sensors, and recordings of 160 s
+// instead of 80 s, calibrated with grid refinement (at most two, as `canalsim calibrate` does):
+// 100 -> 200 -> 400 cells. The 80-s recordings above leave the downstream offset 6.6 % off; twice
+// the PRBS content separates it from the downstream opening. Measured 2026-11-27 (own estimate,
+// in std): Cd free -3.0 % (0.7), Cd submerged +4.3 % (1.2), n +0.3 %, opening +0.08 %, offsets
+// -0.7 % and +1.6 %; the grid-converged ones within 4.2 %. The same on truths on twice and eight
+// times the cells: own estimates within 3.0 % and 3.2 % (docs/calibration.md, "What it achieves").
+TEST(Calibrate, RecoversSixParametersWithin5PercentFromLongerRecordingsOfATruthOnFourTimesTheCells) {
+  CalibrateOptions o;
+  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.grid_refinements = 2;
+  const Scenario truth = perturbed_truth(4);
+  const Calibration c = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 160.0), {}, o);
+  ASSERT_TRUE(c.ok) << c.message;
+  EXPECT_GT(c.calibrated.pools.front().cells, 100) << "the grid limits the fit on 100 cells: refined";
+  EXPECT_LT(c.cost_after, 0.01 * c.cost_before);
+  const std::map<std::string, double> expected = {
+      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
+      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
+      {"offset_y_dwe_mm", -1.5}};
+  ASSERT_EQ(c.parameters.size(), expected.size());
+  for (const ParameterEstimate& p : c.parameters) {
+    const double want = expected.at(p.name);
+    EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << p.name << " = " << p.value << " ± " << p.std;
+    EXPECT_LE(relative_error(p, want), 0.05) << p.name << " = " << p.value;
+    EXPECT_LT(p.std, 0.1 * std::abs(want)) << p.name << " = " << p.value << " ± " << p.std << ": an informative std";
+    EXPECT_LE(std::abs(p.converged - want), 2.0 * p.std) << p.name << " converged " << p.converged << " ± " << p.std;
+    EXPECT_LE(std::abs(p.converged - want), 0.05 * std::abs(want)) << p.name << " converged " << p.converged;
+  }
+  // Within 5 % although the recordings hardly separate them (measured |correlation| 0.975): named.
+  ASSERT_FALSE(c.identifiability.empty());
+  EXPECT_EQ(c.identifiability.front().parameters, (std::vector<std::string>{"cd_free", "cd_submerged"}));
 }
 
 // The grid-converged estimate on another truth: 400 cells. The model's own offset of y_dwe is
