@@ -67,6 +67,9 @@ class Canal {
   // Validates the options; a Canal with invalid options refuses to add reaches and to step.
   const Status& options_status() const { return options_status_; }
   const SolverOptions& options() const { return options_; }
+  // Changes the slope limiter in place (no other option may change after construction): the
+  // steady-state solver's limiter homotopy (steady_state.cpp) solves with van Leer's first.
+  void set_limiter(Limiter limiter) { options_.limiter = limiter; }
 
   // Adds a reach (index reach_count() - 1 on success).
   Status add_reach(const ReachSpec& spec);

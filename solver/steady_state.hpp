@@ -58,8 +58,10 @@ struct SteadyStateSummary {
 
 // Replaces the canal's state by the steady state near it (the current state is the first guess)
 // at the canal's current time. Boundaries are evaluated at that time; they advance only during
-// continuation marches (see continuation_attempts and continuation_span). On failure the state is the last attempt's
-// starting point.
+// continuation marches (see continuation_attempts and continuation_span). With a limiter that is
+// not differentiable (generalised minmod), a first attempt that fails is retried from van Leer's
+// steady state before any march (limiter homotopy, steady_state.cpp). On failure the state is the
+// last attempt's starting point.
 SteadyStateSummary solve_steady_state(Canal& canal, const SteadyStateOptions& options = {});
 
 // How far past the canal's current time solve_steady_state's continuation marches may advance it

@@ -137,6 +137,18 @@ TEST(Simulate, MarchingInPlaceOfNewtonStopsOnceTheCanalHasSettled) {
   }
 }
 
+// Two runs of one experiment that started from the same state by different routes (Newton, a
+// stall, a march): every level and the discharge agree to well within the sensor's 0.05 mm.
+void expect_same_levels_and_discharge(const Recording& a, const Recording& b) {
+  for (const char* c : {"y_dw_mm", "y_dwe_mm", "y_up_mm", "q_lps"}) {
+    double worst = 0.0;
+    const auto& x = a.column(c);
+    const auto& y = b.column(c);
+    for (std::size_t k = 0; k < x.size(); ++k) worst = std::max(worst, std::abs(x[k] - y[k]));
+    EXPECT_LT(worst, 1e-3) << c << " (mm or L/s)";
+  }
+}
+
 // With minmod on 400 cells Newton stalls at the limiter's kinks (docs/numerics.md). The stall is
 // accepted when it is as settled as the march that would replace it, and the recording it starts
 // must be the one that march starts — before the input begins: until 2026-11-27 a continuation
@@ -153,18 +165,40 @@ TEST(Simulate, AStalledSteadyStateStartsWhereTheMarchWould) {
   SimulateOptions marching_only;
   marching_only.use_steady_state_solver = false;
   const Recording marched = simulate(lab, e, marching_only);
-  for (const char* c : {"y_dw_mm", "y_dwe_mm", "y_up_mm", "q_lps"}) {
-    double worst = 0.0;
-    const auto& a = stalled.column(c);
-    const auto& b = marched.column(c);
-    for (std::size_t k = 0; k < a.size(); ++k) worst = std::max(worst, std::abs(a[k] - b[k]));
-    EXPECT_LT(worst, 1e-3) << c << " (mm or L/s)";
-  }
+  expect_same_levels_and_discharge(stalled, marched);
   // The operating point's discharge, not the first command's: van Leer's Newton converges there.
   Scenario van_leer = lab;
   van_leer.numerics.van_leer_limiter = true;
   const double operating = simulate(van_leer, e).column("q_lps").front();
   EXPECT_NEAR(stalled.column("q_lps").front(), operating, 1e-4 * operating);
+}
+
+// Where minmod's first Newton fails outright — the lab's op2 on 400 cells with the calibration
+// tests' six parameters perturbed: "the line search could not reduce the residual" after 2
+// iterations from the design guess, then 60 iterations after each continuation march, and the
+// run started after 60 s of marching with a warning — the steady state is found through van
+// Leer's (solver/steady_state.cpp, limiter homotopy), and it is the state marching settles on.
+TEST(Simulate, MinmodsSteadyStateIsFoundThroughVanLeersWhereItsOwnNewtonFails) {
+  Scenario lab = builtin_scenario("lab");
+  lab.sensors.resolution_mm = 0.0;
+  lab.pools.front().cells = 400;
+  lab.numerics.van_leer_limiter = false;
+  lab.numerics.cfl = 0.45;
+  lab.head_gate->discharge_coefficient = 0.9;
+  lab.head_gate->submerged_discharge_coefficient = 1.1;
+  lab.pools.front().manning_n *= 1.5;
+  lab.downstream.gate.opening_m += 1e-3;
+  const ExperimentSpec e = lab_experiment(25.0, 20.0);
+  std::vector<std::string> warnings;
+  SimulateOptions collect;
+  collect.warning = [&warnings](const std::string& w) { warnings.push_back(w); };
+  const Recording solved = simulate(lab, e, collect);
+  EXPECT_TRUE(warnings.empty()) << (warnings.empty() ? "" : warnings.front());
+  ASSERT_EQ(solved.meta("initial_state").rfind("steady state (Newton", 0), 0u) << solved.meta("initial_state");
+  SimulateOptions marching_only;
+  marching_only.use_steady_state_solver = false;
+  const Recording marched = simulate(lab, e, marching_only);
+  expect_same_levels_and_discharge(solved, marched);
 }
 
 // The paper's condition (23) at the operating point (steady state, constant input).
