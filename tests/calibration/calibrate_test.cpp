@@ -11,6 +11,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "scenarios/builtin.hpp"
@@ -75,6 +76,17 @@ const std::vector<Recording>& truth_recordings() {
   return recs;
 }
 
+// The issue's six parameters, the ones six_perturbed() changes ...
+const std::vector<std::string> kSixParameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm",
+                                                 "offset_y_dw_mm", "offset_y_dwe_mm"};
+
+// ... and their values in `truth` (a perturbed_truth()), in the calibration's units.
+std::map<std::string, double> six_values(const Scenario& truth) {
+  return {{"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
+          {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
+          {"offset_y_dwe_mm", -1.5}};
+}
+
 double relative_error(const ParameterEstimate& p, double truth) { return std::abs(p.value - truth) / std::abs(truth); }
 
 // For two parameters searched in log whose estimates correlate strongly, the error of the
@@ -92,14 +104,11 @@ double determined_log_combination_error(const Calibration& c, std::size_t a, std
 
 TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRecordings) {
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   const Calibration c = calibrate(model(), truth_recordings(), {}, o);
   ASSERT_TRUE(c.ok) << c.message;
   const Scenario truth = perturbed_truth();
-  const std::map<std::string, double> expected = {
-      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
-      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}};
+  const std::map<std::string, double> expected = six_values(truth);
   ASSERT_EQ(c.discretisation.size(), 3u);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const ParameterEstimate& p = c.parameters[j];
@@ -148,10 +157,8 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
 // parameters named, the offset is not fitted but the note says what to add.
 TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   const Scenario truth = perturbed_truth();
-  const std::map<std::string, double> expected = {
-      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
-      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}, {"downstream_zero_head_mm", 0.0}};  // the published law
+  std::map<std::string, double> expected = six_values(truth);
+  expected["downstream_zero_head_mm"] = 0.0;  // the published law
   for (const double lead : {0.3, -0.3}) {
     const std::vector<Recording> recordings = record(truth, {"op1", "op2", "op3", "op4"}, 80.0, lead);
     const Calibration c = calibrate(model(), recordings, {}, CalibrateOptions{});
@@ -203,17 +210,14 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
 // times the cells: own estimates within 3.0 % and 3.2 % (docs/calibration.md, "What it achieves").
 TEST(Calibrate, RecoversSixParametersWithin5PercentFromLongerRecordingsOfATruthOnFourTimesTheCells) {
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   o.grid_refinements = 2;
   const Scenario truth = perturbed_truth(4);
   const Calibration c = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 160.0), {}, o);
   ASSERT_TRUE(c.ok) << c.message;
   EXPECT_GT(c.calibrated.pools.front().cells, 100) << "the grid limits the fit on 100 cells: refined";
   EXPECT_LT(c.cost_after, 0.01 * c.cost_before);
-  const std::map<std::string, double> expected = {
-      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
-      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}};
+  const std::map<std::string, double> expected = six_values(truth);
   ASSERT_EQ(c.parameters.size(), expected.size());
   for (const ParameterEstimate& p : c.parameters) {
     const double want = expected.at(p.name);
@@ -234,14 +238,11 @@ TEST(Calibrate, RecoversSixParametersWithin5PercentFromLongerRecordingsOfATruthO
 // +1.3 % and +0.4 %; the fit stops at a cost of 0.100, the grid's).
 TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTimesTheCells) {
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   const Scenario truth = perturbed_truth(4);
   const Calibration c = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 80.0), {}, o);
   ASSERT_TRUE(c.ok) << c.message;
-  const std::map<std::string, double> expected = {
-      {"cd_free", 0.9}, {"cd_submerged", 1.1}, {"manning_n", truth.pools.front().manning_n},
-      {"downstream_opening_mm", truth.downstream.gate.opening_m * 1e3}, {"offset_y_dw_mm", 2.0},
-      {"offset_y_dwe_mm", -1.5}};
+  const std::map<std::string, double> expected = six_values(truth);
   // The discharge-coefficient pair is named not identifiable (measured 2026-11-27: |correlation|
   // 0.971); what these recordings determine is its combination (the issue: "named, with the
   // combination that is determined instead"), which comes within 5 % (measured: 1.4 %, while
@@ -310,7 +311,7 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   const std::vector<Recording> fitted = record(truth, {"op1", "op4"}, 60.0);
   const std::vector<Recording> other = record(truth, {"op2*"}, 60.0);
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   const Calibration coarse = calibrate(model(), fitted, other, o);
   o.grid_refinements = 1;
   const Calibration refined = calibrate(model(), fitted, other, o);
@@ -580,7 +581,7 @@ TEST(Calibrate, EstimatesStayWithinTheirBounds) {
 // it stopped 11 % above the optimum (0.036460, Cd submerged 1.003 for the truth's 1.1).
 TEST(Calibrate, AParameterWhoseOptimumIsAtItsBoundIsHeldThere) {
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   o.starts = 2;
   o.grid_check = false;
   const Calibration six = calibrate(model(), truth_recordings(), {}, o);
@@ -685,7 +686,7 @@ TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
   ASSERT_TRUE(held.ok) << held.message;
   EXPECT_EQ(held.starts, 2);
   EXPECT_NE(held.starts_note.find("cd_free ended at a bound"), std::string::npos) << held.starts_note;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   const Calibration free = calibrate(model(), truth_recordings(), {}, o);
   ASSERT_TRUE(free.ok) << free.message;
   EXPECT_EQ(free.starts, 1) << free.starts_note;
@@ -702,7 +703,7 @@ TEST(Calibrate, ARunStoppedAtItsIterationLimitIsContinuedByTheRefinedGrid) {
   const Scenario truth = offsets_on_four_times_the_cells();
   const std::vector<Recording> fitted = record(truth, {"op1", "op4"}, 60.0);
   CalibrateOptions o;
-  o.parameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm", "offset_y_dw_mm", "offset_y_dwe_mm"};
+  o.parameters = kSixParameters;
   o.max_iterations = 2;
   o.grid_refinements = 1;
   const Calibration refined = calibrate(model(), fitted, {}, o);
