@@ -29,9 +29,12 @@ class ReplayCost : public ceres::CostFunction {
     for (std::size_t k = 0; k < free_.size(); ++k) z[free_[k]] = parameters[0][k];
     try {
       const std::vector<double> r = problem_.residuals(problem_.predict(z));
+      // Ceres is given finite numbers or a failed evaluation (it then shortens the step).
+      if (!std::all_of(r.begin(), r.end(), [](double v) { return std::isfinite(v); })) return false;
       std::copy(r.begin(), r.end(), residuals);
       if (jacobians && jacobians[0]) {
         const std::vector<double> J = problem_.jacobian(z, r);
+        if (!std::all_of(J.begin(), J.end(), [](double v) { return std::isfinite(v); })) return false;
         const std::size_t p = z.size(), f = free_.size();
         for (std::size_t row = 0; row < r.size(); ++row) {
           for (std::size_t k = 0; k < f; ++k) jacobians[0][row * f + k] = J[row * p + free_[k]];

@@ -9,6 +9,8 @@
 #include <numeric>
 #include <sstream>
 
+#include "core/format.hpp"
+#include "core/metadata.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::calibration {
@@ -22,16 +24,18 @@ std::string format(double v) {
   return out.str();
 }
 
-// The opening the experiment started from: the operating_opening_mm metadata when it is a valid
-// opening of the controlled gate, else the first command.
+// The opening the experiment started from: the operating_opening_mm metadata (an error when it
+// lies outside the controlled gate's range), else the first command.
 double operating_point(const Recording& rec, const Scenario& scenario) {
-  double op = rec.column(columns::gate_command).front();
-  const std::string meta = rec.meta("operating_opening_mm");
-  char* end = nullptr;
-  const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
+  const std::optional<double> meta = metadata_number(rec, "operating_opening_mm");
+  if (!meta) return rec.column(columns::gate_command).front();
   const scenarios::GateSpec* gate = controlled_gate(scenario);
-  if (!meta.empty() && end && *end == '\0' && parsed >= 0.0 && gate && parsed <= gate->max_opening_m * 1e3) op = parsed;
-  return op;
+  if (gate && *meta > gate->max_opening_m * 1e3) {
+    throw InputError((rec.source.empty() ? std::string("recording") : rec.source) + ": metadata operating_opening_mm: " +
+                     format_g(*meta) + " mm: expected an opening of the controlled gate, in [0, " +
+                     format_g(gate->max_opening_m * 1e3) + "] mm");
+  }
+  return *meta;
 }
 
 // The whole recording as a drive: time from 0, the command switched `command_lead_samples` early,
@@ -111,10 +115,7 @@ Recording clocked_drive_with_upstream(const Recording& rec, const Recording& clo
 
 // Where the recording starts (Replay::initial_upstream_mm).
 double initial_upstream(const Recording& rec) {
-  const std::string meta = rec.meta("initial_y_up_mm");
-  char* end = nullptr;
-  const double parsed = meta.empty() ? 0.0 : std::strtod(meta.c_str(), &end);
-  if (!meta.empty() && end && *end == '\0' && std::isfinite(parsed)) return parsed;
+  if (const std::optional<double> meta = metadata_number(rec, "initial_y_up_mm")) return *meta;
   if (!rec.has(columns::upstream_level)) return std::numeric_limits<double>::quiet_NaN();
   const std::vector<double>& t = rec.column(columns::time);
   const std::vector<double>& u = rec.column(columns::gate_command);
@@ -404,6 +405,13 @@ std::vector<std::string> check_recordings(const Scenario& s, const std::vector<R
           break;
         }
       }
+    }
+    // A downstream level that never moves (a dead sensor, a column of zeros) has no response to
+    // compare: its Nrmse (eq. 19) is undefined. (The upstream level may be constant: a fixed supply.)
+    const auto& y = rec.column(columns::level_downstream_end);
+    if (const auto [lowest, highest] = std::minmax_element(y.begin(), y.end()); *lowest == *highest) {
+      problems.push_back(name + ": y_dwe_mm is " + format(*lowest) + " mm in every row: a level that never moves " +
+                         "has no response to compare (a dead sensor?)");
     }
   }
   if (!gate) problems.push_back(s.source + ": the scenario has no gate with controlled = true to replay the command on");

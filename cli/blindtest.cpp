@@ -31,8 +31,18 @@ struct BlindtestArguments {
 };
 
 void run(const BlindtestArguments& args) {
-  check_output_file("--json", args.json);  // written after every trial has run
+  check_outputs({{"--json", args.json}}, {{"--scenario", args.scenario}});  // written after every trial has run
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
+  // --duration shortens the experiments; longer than one of them it would ask for a run the
+  // experiment does not have.
+  for (const auto& name : args.experiments) {
+    const auto* e = s.find_experiment(name);
+    if (e && args.duration > e->duration_s) {
+      throw InputError("--duration " + format_g(args.duration) + ": longer than experiment " + name + " of " + s.name + " (" +
+                       format_g(e->duration_s) + " s): expected at most " + format_g(e->duration_s) +
+                       " s (it shortens the experiments; 0 for their full length)");
+    }
+  }
   diagnosis::BlindtestOptions options;
   options.trials = args.trials;
   options.seed = args.seed;
@@ -123,7 +133,14 @@ void add_blindtest_command(CLI::App& app) {
                   "sensor_quantization unless --effects says otherwise)");
   cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm in the model (default 0.05)")
       ->check(number_in(0.0, 100.0, "a resolution in mm"));
-  cmd->callback([args] { run(*args); });
+  cmd->callback([args, cmd] {
+    // A flag of a mode not chosen would be ignored without a word.
+    if (cmd->count("--two-effect-trials") > 0 && !args->realistic) {
+      throw InputError("blindtest --two-effect-trials: applies to --realistic");
+    }
+    if (cmd->count("--quantum") > 0 && args->model.empty()) throw InputError("blindtest --quantum: applies to --model");
+    run(*args);
+  });
 }
 
 }  // namespace canalsim::cli

@@ -4,6 +4,7 @@
 // scenario — the input file (or built-in text) with the calibrated keys replaced, each with its
 // standard deviation in a comment. Outputs are checked before the work and written atomically
 // only when the calibration succeeded.
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -21,6 +22,7 @@
 #include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "scenarios/builtin.hpp"
+#include "scenarios/run_cost.hpp"
 #include "scenarios/scenario_toml.hpp"
 #include "scenarios/variation.hpp"
 
@@ -35,6 +37,7 @@ struct CalibrateArguments {
   int starts = 2;
   int grid_refinements = 2;
   bool keep_grid = false;
+  bool allow_long = false;
   std::string replay = "diagnosis";
 };
 
@@ -134,14 +137,50 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   return out;
 }
 
+// A calibration replays each recording about 100 times on the scenario's grid (bench/README.md:
+// 400–500 simulations for four recordings), and each refinement about as often on twice the cells
+// (four times the work a replay: half the cell size, half the time step). Refused past the ceiling
+// of one run (scenarios/run_cost.hpp), before any work, unless --allow-long.
+void check_calibration_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
+                            const std::vector<Recording>& validation, const CalibrateArguments& args) {
+  if (args.allow_long) return;
+  double grid_factor = 1.0;
+  for (int r = 1; r <= args.grid_refinements; ++r) grid_factor += std::pow(4.0, r) / std::pow(2.0, r);
+  double updates = 0.0;
+  std::size_t samples = 0;
+  for (const auto* set : {&recordings, &validation}) {
+    for (const Recording& rec : *set) {
+      updates += 100.0 * grid_factor * scenarios::estimate_replay_cost(s, rec).cell_updates;
+      samples += rec.size();
+    }
+  }
+  if (updates <= scenarios::kMaxCellUpdates) return;
+  throw InputError("calibrate: replaying " + std::to_string(recordings.size() + validation.size()) + " recording(s) of " +
+                   std::to_string(samples) + " samples about " + format_g(100.0 * grid_factor, 3) + " times through " +
+                   s.name + " is about " + format_g(updates, 3) + " cell updates, expected at most " +
+                   format_g(scenarios::kMaxCellUpdates) +
+                   " (shorter recordings, --grid-refinements 0; or pass --allow-long)");
+}
+
 int run(const CalibrateArguments& args) {
-  check_output_file("-o", args.out);
-  check_output_file("--json", args.json);
-  check_output_file("--report", args.report);
+  std::vector<NamedFile> inputs = named_files("recording", args.recordings);
+  for (const NamedFile& v : named_files("--validate recording", args.validation)) inputs.push_back(v);
+  inputs.push_back({"--scenario", args.scenario});
+  check_outputs({{"-o", args.out}, {"--json", args.json}, {"--report", args.report}}, inputs);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   const std::string text = scenario_text(args.scenario);
   const std::vector<Recording> recordings = read_all(args.recordings);
   const std::vector<Recording> validation = read_all(args.validation);
+  if (args.replay == "recorded-upstream") {
+    for (const auto* set : {&recordings, &validation}) {
+      for (const Recording& r : *set) {
+        if (!r.has(columns::upstream_level)) {
+          throw InputError(r.source + ": missing column y_up_mm: --replay recorded-upstream drives the head gate with it");
+        }
+      }
+    }
+  }
+  check_calibration_cost(s, recordings, validation, args);
 
   calibration::CalibrateOptions options;
   options.parameters = args.params;
@@ -174,17 +213,14 @@ int run(const CalibrateArguments& args) {
     std::cerr << "canalsim: error: calibration failed: " << c.message << '\n';
     return 1;
   }
-  const std::string toml = calibrated_toml(text, c, args);
-  write_file_atomically(args.out, toml);
-  std::cout << "wrote " << args.out << '\n';
-  if (!args.json.empty()) {
-    write_file_atomically(args.json, calibration::to_json(c).dump(2) + "\n");
-    std::cout << "wrote " << args.json << '\n';
-  }
+  // The scenario, the JSON and the report are one set, written all or nothing.
+  std::vector<FileContents> outputs{{args.out, calibrated_toml(text, c, args)}};
+  if (!args.json.empty()) outputs.emplace_back(args.json, calibration::to_json(c).dump(2) + "\n");
   if (!args.report.empty()) {
-    write_file_atomically(args.report, calibration::html_report(c, "canalsim calibration: " + s.name));
-    std::cout << "wrote " << args.report << '\n';
+    outputs.emplace_back(args.report, calibration::html_report(c, "canalsim calibration: " + s.name));
   }
+  write_files_atomically(outputs);
+  for (const auto& [file, contents] : outputs) std::cout << "wrote " << file.string() << '\n';
   return 0;
 }
 
@@ -219,6 +255,8 @@ void add_calibrate_command(CLI::App& app) {
                   "Calibrate again on twice the cells while that lowers the cost by more than a third, at most N times "
                   "(default 2; 0: the scenario's grid; docs/calibration.md)")
       ->check(integer_in(0, 3, "a number of refinements"));
+  cmd->add_flag("--allow-long", args->allow_long,
+                "Run past the cost ceiling (1e10 cell updates over all replays; docs/scenarios.md)");
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
                 "or four times its cells fit the recordings better (by default those are written; docs/calibration.md)");

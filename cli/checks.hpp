@@ -15,8 +15,10 @@
 #include <sstream>
 #include <string>
 #include <system_error>
+#include <vector>
 #include <unistd.h>
 
+#include "core/files.hpp"
 #include "core/format.hpp"
 #include "core/recording.hpp"
 
@@ -88,9 +90,10 @@ inline CLI::Validator thread_count() { return integer_in(1, 64, "a number of thr
 
 // ---- output paths -----------------------------------------------------------------------------
 
-// FILE given to an output flag (--json FILE, -o FILE): its directory exists and FILE is not a
-// directory. Writing happens after the work (atomically, via a temporary file next to FILE), so
-// without this check a typo costs the whole run.
+// FILE given to an output flag (--json FILE, -o FILE): its directory exists and FILE is new or a
+// regular file (a device, FIFO or socket is never replaced; core/files.hpp). Writing happens
+// after the work (atomically, via a temporary file next to FILE), so without this check a typo
+// costs the whole run.
 inline void check_output_file(const std::string& flag, const std::string& file) {
   namespace fs = std::filesystem;
   if (file.empty()) return;
@@ -98,11 +101,59 @@ inline void check_output_file(const std::string& flag, const std::string& file) 
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw InputError(flag + " " + file + ": is a directory, expected a file name");
+  if (const std::string problem = replaceable_file_problem(path); !problem.empty()) {
+    throw InputError(flag + " " + file + ": " + problem);
+  }
   if (!fs::exists(dir, ec)) throw InputError(flag + " " + file + ": directory " + dir.string() + " does not exist");
   if (!fs::is_directory(dir, ec)) throw InputError(flag + " " + file + ": " + dir.string() + " is not a directory");
   if (::access(dir.c_str(), W_OK) != 0) {
     throw InputError(flag + " " + file + ": directory " + dir.string() + " is not writable");
   }
+}
+
+// A file named on the command line: the flag that names it ("-o", "--json", "recording").
+struct NamedFile {
+  std::string flag;
+  std::string path;
+};
+
+// True when `a` and `b` name one file: the same path, or two names of an existing file (links).
+inline bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a), ec), cb = fs::weakly_canonical(fs::absolute(b), ec);
+  return ca == cb;
+}
+
+// Every output of a command, before any work: each as check_output_file wants it, no two naming
+// the same file (one would be lost), and none naming an existing input (it would be overwritten;
+// a built-in scenario's name is not a file).
+inline void check_outputs(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs = {}) {
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    if (outputs[i].path.empty()) continue;
+    check_output_file(outputs[i].flag, outputs[i].path);
+    for (std::size_t j = 0; j < i; ++j) {
+      if (!outputs[j].path.empty() && same_file(outputs[i].path, outputs[j].path)) {
+        throw InputError(outputs[i].flag + " " + outputs[i].path + ": the same file as " + outputs[j].flag + " " +
+                         outputs[j].path + ": expected a different file for each output");
+      }
+    }
+    for (const NamedFile& input : inputs) {
+      std::error_code ec;
+      if (std::filesystem::exists(input.path, ec) && same_file(outputs[i].path, input.path)) {
+        throw InputError(outputs[i].flag + " " + outputs[i].path + ": the same file as the " + input.flag + " " +
+                         input.path + ": expected an output that does not overwrite an input");
+      }
+    }
+  }
+}
+
+// The inputs of a command given as a list of files (recordings), each named by `flag`.
+inline std::vector<NamedFile> named_files(const std::string& flag, const std::vector<std::string>& paths) {
+  std::vector<NamedFile> out;
+  for (const auto& p : paths) out.push_back({flag, p});
+  return out;
 }
 
 // DIR given to a flag that creates it when missing (simulate --out-dir): DIR is a directory, or

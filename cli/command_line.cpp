@@ -1,4 +1,5 @@
 // The command line: subcommand registration, parsing and the one-line error contract.
+#include <new>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -87,6 +88,13 @@ int run_command_line(CLI::App& app, int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return report_parse_error(app, e, argc, argv);
+  } catch (const std::bad_alloc&) {
+    // What ran out of memory is the subcommand's work on its inputs: say which, and what to do.
+    const auto chosen = app.get_subcommands();
+    const std::string sub = chosen.empty() ? std::string() : " " + chosen.front()->get_name();
+    std::cerr << "canalsim: error: canalsim" << sub << " ran out of memory: expected inputs that fit in memory "
+              << "(shorter or coarser recordings, fewer cells)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "canalsim: error: " << one_line(e.what()) << '\n';
     return 1;

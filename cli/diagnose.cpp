@@ -6,6 +6,7 @@
 // (diagnosis/baseline.hpp). `canalsim diagnose --model M REC.csv...` does the same for a reduced model
 // (diagnosis/model_diagnosis.hpp). Prints a summary; the JSON and HTML are written atomically and only when
 // the whole diagnosis succeeded.
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -44,6 +45,7 @@ struct DiagnoseArguments {
   bool recorded_upstream = false;
   bool no_clock = false;
   bool allow_long = false;
+  std::vector<std::string> flags_given;  // the flags the user typed, for check_flags_apply
 };
 
 // Stops at the first unreadable recording: its error names the file and line, and the next
@@ -63,10 +65,22 @@ std::vector<Recording> read_all_in_mm(const std::vector<std::string>& files) {
   return recordings;
 }
 
+// --recorded-upstream drives the head gate with each recording's y_up_mm: every one must have it.
+void check_recorded_upstream(const std::vector<Recording>& recordings, const DiagnoseArguments& args) {
+  if (!args.recorded_upstream) return;
+  for (const Recording& r : recordings) {
+    if (!r.has(columns::upstream_level)) {
+      throw InputError(r.source + ": missing column y_up_mm: --recorded-upstream drives the head gate with it");
+    }
+  }
+}
+
 // Outputs are written at the end of a diagnosis that can take minutes: check their places first.
-void check_outputs(const DiagnoseArguments& args) {
-  check_output_file("--json", args.json);
-  check_output_file("--report", args.report);
+void check_diagnosis_outputs(const DiagnoseArguments& args) {
+  std::vector<NamedFile> inputs = named_files("recording", args.recordings);
+  for (const NamedFile& b : named_files("--baseline recording", args.baseline)) inputs.push_back(b);
+  if (!args.scenario.empty()) inputs.push_back({"--scenario", args.scenario});
+  check_outputs({{"--json", args.json}, {"--report", args.report}}, inputs);
 }
 
 // The JSON and the HTML report are written together, all or nothing: a report that cannot be
@@ -114,18 +128,12 @@ void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Record
   const double candidates = args.candidates.empty() ? 10.0 : static_cast<double>(args.candidates.size());
   double updates = 0.0;
   for (const Recording& rec : recordings) {
-    scenarios::ExperimentSpec replay;
-    replay.name = rec.source;
-    replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
-    updates += (1.0 + 5.0 * candidates) * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
+    updates += (1.0 + 5.0 * candidates) * scenarios::estimate_replay_cost(s, rec).cell_updates;
   }
   // A calibration on a baseline replays each baseline recording about 100–150 times (30
   // Levenberg–Marquardt iterations with a finite-difference Jacobian; bench/README.md).
   for (const Recording& rec : baseline) {
-    scenarios::ExperimentSpec replay;
-    replay.name = rec.source;
-    replay.duration_s = rec.column(columns::time).back() - rec.column(columns::time).front();
-    const double cost = 100.0 * scenarios::estimate_run_cost(s, replay, rec.sample_period()).cell_updates;
+    const double cost = 100.0 * scenarios::estimate_replay_cost(s, rec).cell_updates;
     if (updates + cost > scenarios::kMaxCellUpdates) {
       throw InputError("diagnose: calibrating on the baseline replays " + rec.source + " (" + format_g(rec.size(), 3) +
                        " samples) about 100 times through " + s.name + ": with the diagnosis about " +
@@ -158,6 +166,7 @@ diagnosis::DiagnoseOptions diagnose_options(const DiagnoseArguments& args) {
 // scenario) runs before the calibration, and nothing is written unless both steps succeed.
 int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>& recordings, const DiagnoseArguments& args) {
   const std::vector<Recording> baseline = read_all_in_mm(args.baseline);
+  check_recorded_upstream(baseline, args);
   if (const auto problems = diagnosis::check_baseline(baseline, recordings); !problems.empty()) {
     throw InputError(problems.front());
   }
@@ -182,6 +191,20 @@ int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>
                        diagnosis::baseline_json(r));
 }
 
+// A flag of the other mode would be ignored without a word: refuse it.
+void check_flags_apply(const DiagnoseArguments& args) {
+  const std::vector<std::string> scenario_only = {"--baseline", "--recorded-upstream", "--no-clock", "--allow-long"};
+  const std::vector<std::string> model_only = {"--quantum", "--gate-speed", "--upstream-level"};
+  const bool model = !args.model.empty();
+  for (const std::string& flag : args.flags_given) {
+    const auto& other = model ? scenario_only : model_only;
+    if (std::find(other.begin(), other.end(), flag) != other.end()) {
+      throw InputError("diagnose " + flag + ": applies to " + (model ? "--scenario" : "--model") + ", not to " +
+                       (model ? "--model " + args.model : "--scenario " + args.scenario));
+    }
+  }
+}
+
 int run(const DiagnoseArguments& args) {
   if (args.scenario.empty() == args.model.empty()) {
     throw InputError("diagnose: give exactly one of --scenario S.toml and --model M");
@@ -189,17 +212,19 @@ int run(const DiagnoseArguments& args) {
   if (!args.baseline.empty() && !args.model.empty()) {
     throw InputError("diagnose: --baseline calibrates a scenario: use it with --scenario, not --model");
   }
+  check_flags_apply(args);
   if (args.recordings.empty()) {
     throw InputError(args.baseline.empty()
                          ? "diagnose: no recordings given (canalsim diagnose --scenario S REC.csv...)"
                          : "diagnose: no recordings to diagnose after the baseline: end the --baseline list with -- "
                            "(canalsim diagnose --scenario S --baseline B1.csv B2.csv -- R1.csv R2.csv) or put --baseline last");
   }
-  check_outputs(args);
+  check_diagnosis_outputs(args);
   if (!args.model.empty()) return run_model(args);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   // One line for the first problem (it names the recording); the user reruns to see the next.
   const std::vector<Recording> recordings = read_all_in_mm(args.recordings);
+  check_recorded_upstream(recordings, args);
   if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
   }
@@ -246,7 +271,10 @@ void add_diagnose_command(CLI::App& app) {
                 "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
   cmd->add_flag("--allow-long", args->allow_long,
                 "--scenario: run past the cost ceiling (1e10 cell updates over all replays; docs/scenarios.md)");
-  cmd->callback([args] {
+  cmd->callback([args, cmd] {
+    for (const CLI::Option* option : cmd->get_options()) {
+      if (option->count() > 0 && !option->get_lnames().empty()) args->flags_given.push_back("--" + option->get_lnames().front());
+    }
     const int code = run(*args);
     if (code != 0) throw CLI::RuntimeError(code);
   });

@@ -48,6 +48,7 @@ struct FitArguments {
   std::string bounds;  // NAME=LO:HI,...
   std::string start;   // NAME=V,...
   std::string freq_check;  // scenario the recordings were simulated from
+  bool allow_long = false;
 };
 
 std::string fixed(double v, int digits) {
@@ -173,6 +174,39 @@ std::string gain_unit_text(ModelKind kind, const std::vector<ExperimentData>& da
   return "K in " + unit + per_second;
 }
 
+// A model whose error is more than ten times the recording's own variation (Nrmse below
+// -1000 %, eq. 19, or not a number) is not a fit: it diverged (an exponent the bounds or --gamma held where the
+// model is unstable), and printing its parameters would present it as one.
+void require_model_follows(const FitResult& fit, const std::string& stage) {
+  for (std::size_t i = 0; i < fit.nrmse.size(); ++i) {
+    if (fit.nrmse[i] >= -1000.0) continue;
+    const auto figure = [](double v, const char* unit) {
+      return std::isfinite(v) ? format_g(v, 3) + unit : std::string("not finite");
+    };
+    throw InputError(stage + ": the best model found does not follow " + fit.sources[i] + " (Nrmse " +
+                     figure(fit.nrmse[i], " %") + ", IAE " + figure(fit.iae[i], " mm s") +
+                     "): it diverges within the bounds given (widen --bounds or the --gamma grid)");
+  }
+}
+
+// Fits that would run for minutes are refused before they start (identification.hpp,
+// estimate_fit_operations), as simulate and diagnose refuse long runs.
+void check_fit_cost(ModelKind kind, const std::vector<ExperimentData>& data, const FitOptions& options,
+                    const std::optional<GammaGrid>& grid, const FitArguments& args) {
+  if (args.allow_long) return;
+  const double per_recording = grid ? static_cast<double>(grid->values().size()) : 1.0;
+  const double fits = per_recording * (args.nominal ? 2.0 : 1.0);
+  const double operations = estimate_fit_operations(kind, data, options, fits);
+  if (operations <= kMaxFitOperations) return;
+  std::size_t samples = 0;
+  for (const auto& d : data) samples += d.size();
+  throw InputError("fit: " + model_name(kind) + " on " + std::to_string(data.size()) + " recording(s) of " +
+                   std::to_string(samples) + " samples" + (grid ? " over " + args.gamma : std::string()) + " is about " +
+                   format_g(operations, 3) + " model operations, expected at most " + format_g(kMaxFitOperations, 3) +
+                   " (about two minutes): shorter recordings (canalsim resample --period), a coarser --gamma grid; "
+                   "or pass --allow-long");
+}
+
 // Table labels: the recordings' file names, or their whole paths where two share a file name.
 std::vector<std::string> recording_labels(const std::vector<std::string>& sources) {
   std::vector<std::string> labels;
@@ -226,7 +260,9 @@ std::string uncertainty_text(double dp, double nominal) {
 }
 
 void run_fit(const FitArguments& args) {
-  check_output_file("--json", args.json);  // written after all the fits
+  std::vector<NamedFile> inputs = named_files("recording", args.recordings);
+  inputs.push_back({"--freq-check", args.freq_check});
+  check_outputs({{"--json", args.json}}, inputs);  // written after all the fits
   const ModelKind kind = require_model_kind(args.model);
   std::optional<GammaGrid> grid;
   if (!args.gamma.empty()) {
@@ -268,6 +304,7 @@ void run_fit(const FitArguments& args) {
   if (const Status status = options.validate(); !status) {
     throw InputError((args.bounds.empty() && args.start.empty() ? "" : "--bounds/--start: ") + status.message());
   }
+  check_fit_cost(kind, data, options, grid, args);
 
   // Per-recording fits.
   std::vector<FitResult> fits;
@@ -293,10 +330,12 @@ void run_fit(const FitArguments& args) {
     progress.report({-1.0, "nominal model done"});
   }
 
-  // Nothing is printed unless every figure is a number.
+  // Nothing is printed unless every figure is a number and every model follows its recording.
   for (std::size_t j = 0; j < fits.size(); ++j) {
+    require_model_follows(fits[j], "fit of " + model_name(kind) + " to " + fits[j].sources.front());
     require_finite_figures(fit_json(fits[j], data, {j}), "fit of " + model_name(kind) + " to " + fits[j].sources.front());
   }
+  if (nominal) require_model_follows(*nominal, "nominal fit of " + model_name(kind));
   if (nominal) {
     std::vector<std::size_t> all(data.size());
     for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
@@ -419,7 +458,21 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--freq-check", args->freq_check,
                   "Scenario the recordings were simulated from: compare each fitted model's frequency response "
                   "with the linearised pool's over the PRBS band (docs/linearization.md)");
-  cmd->callback([args] { run_fit(*args); });
+  cmd->add_flag("--allow-long", args->allow_long, "Fit past the ceiling on the estimated work (about two minutes)");
+  cmd->callback([args, cmd] {
+    // A flag that does not apply to the model or memory chosen would be ignored without a word.
+    if (cmd->count("--memory-terms") > 0 && args->memory == "full") {
+      throw InputError("fit --memory-terms: applies to --memory short (the full memory keeps every term)");
+    }
+    if (cmd->count("--upstream-level") > 0) {
+      const ModelKind kind = require_model_kind(args->model);
+      if (!uses_upstream_level(kind)) {
+        throw InputError("fit --upstream-level: model " + model_name(kind) +
+                         " does not use the upstream level (nliom-f, nlfom-f, nliom-s, nlfom-s and hybrid do)");
+      }
+    }
+    run_fit(*args);
+  });
 }
 
 }  // namespace canalsim::cli

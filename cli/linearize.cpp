@@ -118,8 +118,7 @@ void run(const LinearizeArguments& args) {
   options.output = linearize::parse_output(args.output, "--output");
   if (!args.freq.empty()) options.grid = linearize::parse_grid(args.freq, "--freq");
   options.poles = args.poles;
-  if (!args.json.empty()) check_output_file("--json", args.json);
-  if (!args.csv.empty()) check_output_file("--csv", args.csv);
+  check_outputs({{"--json", args.json}, {"--csv", args.csv}}, {{"--scenario", args.scenario}});
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   const auto* e = s.find_experiment(args.experiment);
   if (!e) {
@@ -133,8 +132,10 @@ void run(const LinearizeArguments& args) {
       throw InputError("--freq: the grid hits an undamped mode of the linearised canal (G(iω) infinite); move the grid");
     }
   }
-  if (!args.json.empty()) write_file_atomically(args.json, json_text(r, args));
-  if (!args.csv.empty()) write_file_atomically(args.csv, csv_text(r));
+  std::vector<FileContents> outputs;  // written together, all or nothing
+  if (!args.json.empty()) outputs.emplace_back(args.json, json_text(r, args));
+  if (!args.csv.empty()) outputs.emplace_back(args.csv, csv_text(r));
+  write_files_atomically(outputs);
   print_summary(r, args);
 }
 

@@ -8,6 +8,7 @@
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
 #include "core/format.hpp"
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "core/resample.hpp"
 
@@ -18,14 +19,19 @@ struct ResampleArguments {
   std::string input;
   std::string output;
   double period_s = 0.0;
+  bool allow_long = false;
 };
 
 void run_resample(const ResampleArguments& args) {
-  check_output_file("-o", args.output);
+  check_outputs({{"-o", args.output}}, {{"recording", args.input}});
   const Recording in = read_unevenly_sampled_recording(args.input);
   ResampleOptions options;
   options.period_s = args.period_s;
+  options.allow_large = args.allow_long;
+  ProgressLine progress("resampling " + args.input);
+  options.progress = progress.callback();
   const Recording out = resample(in, options);
+  progress.finish();
   write_recording(args.output, out);
   std::cout << "wrote " << args.output << " (" << out.size() << " samples, " << format_g(args.period_s)
             << " s, from " << in.size() << ")\n";
@@ -42,6 +48,8 @@ void add_resample_command(CLI::App& app) {
   cmd->add_option("--period", args->period_s, "New sampling period in s (e.g. 0.125)")
       ->required()
       ->check(number_in(1e-6, 1e6, "a period in s"));
+  cmd->add_flag("--allow-long", args->allow_long,
+                "Resample past the ceilings on rows written (5e6), fine-grid samples (5e7) and filter work (2e10)");
   cmd->callback([args] { run_resample(*args); });
 }
 

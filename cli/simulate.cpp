@@ -95,6 +95,16 @@ void run(const SimulateArguments& args) {
   const auto chosen = choose_experiments(s, args);
   check_outputs(chosen, args);
   const auto files = output_files(chosen, args);
+  std::vector<NamedFile> outputs_named, inputs{{"scenario", args.scenario}};
+  for (const auto& f : files) outputs_named.push_back({args.output.empty() ? "--out-dir" : "-o", f.string()});
+  for (const auto* e : chosen) {
+    if (e->input.kind == scenarios::InputKind::file) inputs.push_back({"input file of " + e->name, e->input.file});
+  }
+  // A directory --out-dir creates holds neither an input nor a file to replace.
+  std::error_code ec;
+  if (!args.output.empty() || std::filesystem::is_directory(args.out_dir.empty() ? "." : args.out_dir, ec)) {
+    check_outputs(outputs_named, inputs);
+  }
   // Every experiment runs first; the recordings are written together at the end, all or nothing,
   // so that a failure in the third experiment leaves no first two files (and replaces nothing).
   std::vector<FileContents> outputs;

@@ -1,14 +1,17 @@
 #include "core/files.hpp"
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <sstream>
 #include <system_error>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "core/errors.hpp"
@@ -68,7 +71,16 @@ constexpr int kFree = 0, kFilling = 1, kLive = 2;
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free atomics");
 
 Slot g_slots[kSlots];
-struct sigaction g_previous_interrupt, g_previous_terminate;
+// The signals that end a run with its outputs unwritten: Ctrl-C, kill, and a closed terminal.
+constexpr int kGuardedSignals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction g_previous[std::size(kGuardedSignals)];
+
+struct sigaction* previous_action(int signal_number) {
+  for (std::size_t i = 0; i < std::size(kGuardedSignals); ++i) {
+    if (kGuardedSignals[i] == signal_number) return &g_previous[i];
+  }
+  return nullptr;
+}
 
 void undo(Slot& slot) {
   if (slot.restore_to[0] != '\0') {
@@ -84,7 +96,7 @@ extern "C" void remove_live_paths_and_reraise(int signal_number) {
   }
   // The signal's previous disposition (the default: terminate) takes over; it is blocked while
   // this handler runs, so the raised one is delivered as the handler returns.
-  ::sigaction(signal_number, signal_number == SIGINT ? &g_previous_interrupt : &g_previous_terminate, nullptr);
+  ::sigaction(signal_number, previous_action(signal_number), nullptr);
   ::raise(signal_number);
 }
 
@@ -109,8 +121,7 @@ void copy_path(char (&to)[kPathBytes], const std::filesystem::path& from) {
 InterruptGuard::InterruptGuard(const std::filesystem::path& path, const std::filesystem::path& restore_to) {
   static std::once_flag installed;
   std::call_once(installed, [] {
-    install_handler(SIGINT, &g_previous_interrupt);
-    install_handler(SIGTERM, &g_previous_terminate);
+    for (const int signal_number : kGuardedSignals) install_handler(signal_number, previous_action(signal_number));
   });
   for (int i = 0; i < kSlots; ++i) {
     int expected = kFree;
@@ -149,13 +160,20 @@ std::filesystem::path beside(const std::filesystem::path& file, const char* kind
   return file.string() + "." + kind + "." + std::to_string(static_cast<long>(::getpid()));
 }
 
+// Writes the temporary file; it takes the permissions of the file it will replace, if any.
 void write_contents(const std::filesystem::path& temporary, const std::filesystem::path& file,
                     const std::string& contents) {
-  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-  if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
-  out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-  out.flush();
-  if (!out) throw InputError(file.string() + ": write failed (disk full?)");
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(file.string() + ": cannot write (directory missing or read-only?)");
+    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+    out.flush();
+    if (!out) throw InputError(file.string() + ": write failed (disk full?)");
+  }
+  struct stat existing {};
+  if (::stat(file.c_str(), &existing) == 0 && ::chmod(temporary.c_str(), existing.st_mode & 07777) != 0) {
+    throw InputError(file.string() + ": cannot keep the file's permissions: " + std::strerror(errno));
+  }
 }
 
 // A second name for `file`'s current contents that survives the rename over `file`: a hard link
@@ -174,16 +192,48 @@ void keep_backup(const std::filesystem::path& file, const std::filesystem::path&
 
 }  // namespace
 
+std::string replaceable_file_problem(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::status(file, ec);  // follows a symbolic link to its target
+  if (ec || !fs::exists(status) || fs::is_regular_file(status)) return "";
+  const char* kind = fs::is_directory(status)  ? "a directory"
+                     : fs::is_fifo(status)     ? "a FIFO"
+                     : fs::is_socket(status)   ? "a socket"
+                     : fs::is_character_file(status) || fs::is_block_file(status) ? "a device"
+                                                                                 : "not a regular file";
+  const bool linked = fs::is_symlink(fs::symlink_status(file, ec));
+  return std::string(linked ? "links to " : "is ") + kind + ": expected a regular file (or a new path) to write";
+}
+
+std::filesystem::path written_path(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_symlink(fs::symlink_status(file, ec))) return file;
+  const fs::path target = fs::weakly_canonical(file, ec);
+  return ec ? file : target;
+}
+
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
   write_files_atomically({{file, contents}});
 }
 
-void write_files_atomically(const std::vector<FileContents>& files) {
+void write_files_atomically(const std::vector<FileContents>& requested) {
   namespace fs = std::filesystem;
+  // 0. What will be written: a symbolic link's target (the link stays), only regular files
+  //    replaced, no file twice (two names of one file included).
+  std::vector<FileContents> files;
+  for (const auto& [file, contents] : requested) {
+    if (const std::string problem = replaceable_file_problem(file); !problem.empty()) {
+      throw InputError(file.string() + ": " + problem);
+    }
+    files.emplace_back(written_path(file), contents);
+  }
   for (std::size_t i = 0; i < files.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (fs::absolute(files[i].first).lexically_normal() == fs::absolute(files[j].first).lexically_normal()) {
-        throw std::logic_error("write_files_atomically: " + files[i].first.string() + " given twice");
+        throw InputError(requested[i].first.string() + ": the same file as " + requested[j].first.string() +
+                         ": expected a different file for each output");
       }
     }
   }

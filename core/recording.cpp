@@ -3,6 +3,7 @@
 #include "core/text.hpp"
 
 #include "core/format.hpp"
+#include "core/metadata.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -160,9 +161,11 @@ Recording parse_recording(const std::string& text, const std::string& source,
   std::string line;
   std::size_t line_number = 0;
   bool have_header = false;
-  std::vector<std::size_t> row_lines;
+  std::vector<std::size_t> row_lines, metadata_lines;
   while (std::getline(in, line)) {
     ++line_number;
+    // A UTF-8 byte order mark (spreadsheets write one) is not part of the first line's text.
+    if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     const std::string content = trim(line);
     if (content.empty()) continue;
     if (content.front() == '#') {
@@ -171,6 +174,7 @@ Recording parse_recording(const std::string& text, const std::string& source,
       const auto colon = body.find(':');
       if (colon != std::string::npos) {
         rec.metadata.emplace_back(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
+        metadata_lines.push_back(line_number);
       }
       continue;
     }
@@ -208,6 +212,8 @@ Recording parse_recording(const std::string& text, const std::string& source,
                      ", no header line (expected column names, e.g. t_s,u_mm,y_dwe_mm)");
   }
   if (rec.has(columns::time)) check_time_axis(rec, row_lines, options.uniform_tolerance);
+  check_metadata(rec, std::isfinite(options.uniform_tolerance),
+                 [&](std::size_t i) { return source + ":" + std::to_string(metadata_lines[i]); });
   rec.row_lines = std::move(row_lines);
   return rec;
 }

@@ -47,42 +47,101 @@ double kernel(double tau, double fc, double half) {
 
 Status ResampleOptions::validate() const {
   return Validator()
-      .require(period_s > 0.0 && std::isfinite(period_s), "period_s", period_s, "a positive number of seconds")
+      .require(period_s >= kMinSamplePeriod && std::isfinite(period_s), "period_s", period_s,
+               "a period of at least " + format_g(kMinSamplePeriod) + " s")
       .status();
 }
 
-Recording resample(const Recording& in, const ResampleOptions& options) {
+namespace {
+
+// The output grid and the filter's, as estimate_resample_cost and resample both need them.
+struct Grids {
+  double t0 = 0.0, duration = 0.0;
+  double h_fine = 0.0;      // the fine grid's step: the median input step, or P if finer
+  bool filter = false;      // P coarser than the record: anti-alias
+  double rows = 0.0, fine_samples = 0.0, reach = 0.0;
+};
+
+Grids grids_for(const Recording& in, const ResampleOptions& options) {
   const std::string source = in.source.empty() ? "recording" : in.source;
   if (const Status status = options.validate(); !status) throw InputError(source + ": " + status.message());
   const auto& t = in.column(columns::time);
   if (t.size() < 2) throw InputError(source + ": expected at least two samples to resample");
   const double P = options.period_s;
-  const double t0 = t.front(), duration = t.back() - t0;
-  if (P > duration) {
+  Grids g;
+  g.t0 = t.front();
+  g.duration = t.back() - g.t0;
+  if (P > g.duration) {
     throw InputError(source + ": period " + format_g(P) + " s is longer than the recording (" +
-                     format_g(duration) + " s)");
+                     format_g(g.duration) + " s)");
   }
-  const auto n_out = static_cast<std::size_t>(std::floor(duration / P + 1e-9)) + 1;
+  g.h_fine = std::min(median_step(t), P);
+  g.filter = P > 1.0001 * g.h_fine;
+  g.rows = std::floor(g.duration / P + 1e-9) + 1.0;
+  g.fine_samples = g.filter ? std::floor(g.duration / g.h_fine) + 1.0 : 0.0;
+  g.reach = std::ceil(12.0 * P / g.h_fine);
+  return g;
+}
+
+std::size_t filtered_columns(const Recording& in, const ResampleOptions& options) {
+  std::size_t n = 0;
+  for (const auto& name : in.names) {
+    const bool held = std::find(options.held_columns.begin(), options.held_columns.end(), name) !=
+                      options.held_columns.end();
+    n += name != columns::time && !held;
+  }
+  return n;
+}
+
+}  // namespace
+
+ResampleCost estimate_resample_cost(const Recording& in, const ResampleOptions& options) {
+  const Grids g = grids_for(in, options);
+  ResampleCost cost;
+  cost.rows = g.rows;
+  cost.fine_samples = g.fine_samples;
+  if (g.filter) {
+    const auto columns = static_cast<double>(filtered_columns(in, options));
+    cost.filter_operations = columns * (g.fine_samples + g.rows * (2.0 * g.reach + 1.0));
+  }
+  return cost;
+}
+
+Recording resample(const Recording& in, const ResampleOptions& options) {
+  const std::string source = in.source.empty() ? "recording" : in.source;
+  const Grids g = grids_for(in, options);
+  const ResampleCost cost = estimate_resample_cost(in, options);
+  if (!options.allow_large) {
+    const auto refuse = [&](const std::string& verb, double value, const std::string& noun, double ceiling) {
+      if (value <= ceiling) return;
+      throw InputError(source + ": resampling " + format_g(g.duration) + " s at " + format_g(options.period_s) + " s " +
+                       verb + " " + format_g(value, 3) + " " + noun + ", expected at most " + format_g(ceiling, 3) +
+                       " (a longer --period, or pass --allow-long)");
+    };
+    refuse("writes", cost.rows, "rows", kMaxResampledRows);
+    refuse("filters", cost.fine_samples, "samples of the fine grid", kMaxFineSamples);
+    refuse("takes", cost.filter_operations, "filter operations", kMaxFilterOperations);
+  }
+  const auto& t = in.column(columns::time);
+  const double P = options.period_s, t0 = g.t0, h_fine = g.h_fine;
+  const bool filter = g.filter;
+  const double fc = 0.385 / P, half = 12.0 * P;
+  const auto n_out = static_cast<std::size_t>(g.rows);
+  const auto n_fine = static_cast<std::size_t>(g.fine_samples);
+  const auto reach = static_cast<std::ptrdiff_t>(g.reach);
   std::vector<double> t_out(n_out);
   for (std::size_t k = 0; k < n_out; ++k) t_out[k] = t0 + static_cast<double>(k) * P;
-
-  // The fine grid and the filter (used when P is coarser than the recording's own step).
-  const double h_fine = std::min(median_step(t), P);
-  const bool filter = P > 1.0001 * h_fine;
-  const double fc = 0.385 / P, half = 12.0 * P;
-  const auto n_fine = static_cast<std::size_t>(std::floor(duration / h_fine)) + 1;
-  if (filter && n_fine > 200'000'000) {
-    throw InputError(source + ": " + std::to_string(n_fine) +
-                     " samples at the recording's median step: too many to filter");
-  }
-  const auto reach = static_cast<std::ptrdiff_t>(std::ceil(half / h_fine));
 
   Recording out;
   out.metadata = in.metadata;
   out.source = in.source;
   out.set_meta("resampled_period_s", format_g(P, 10));
+  if (!in.meta("sampling_period_s").empty()) out.set_meta("sampling_period_s", format_g(P, 10));
   std::vector<double> fine(filter ? n_fine : 0);
   for (std::size_t c = 0; c < in.names.size(); ++c) {
+    if (options.progress) {
+      options.progress({static_cast<double>(c) / static_cast<double>(in.names.size()), "resampling " + in.names[c]});
+    }
     const std::string& name = in.names[c];
     const auto& v = in.columns[c];
     std::vector<double> r(n_out);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "core/status.hpp"
 
@@ -23,12 +24,31 @@ namespace canalsim {
 struct ResampleOptions {
   double period_s = 0.0;
   std::vector<std::string> held_columns = {columns::gate_command, columns::regime};
+  // Past the ceilings of ResampleCost (`--allow-long`).
+  bool allow_large = false;
+  ProgressCallback progress;  // the share of the columns done (may be empty)
   [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
 };
 
+// What a resampling will take, known before it starts: the rows written, the samples of the fine
+// grid the filter reads, and the filter's multiply-adds. Each has a ceiling (kMaxResampledRows:
+// 5·10⁶ rows, a file of about 300 MB that the reader still takes; kMaxFineSamples: 5·10⁷, 400 MB;
+// kMaxFilterOperations: 2·10¹⁰, about half a minute here) that resample() refuses to pass unless
+// allow_large is set.
+struct ResampleCost {
+  double rows = 0.0;
+  double fine_samples = 0.0;
+  double filter_operations = 0.0;
+};
+inline constexpr double kMaxResampledRows = 5.0e6;
+inline constexpr double kMaxFineSamples = 5.0e7;
+inline constexpr double kMaxFilterOperations = 2.0e10;
+ResampleCost estimate_resample_cost(const Recording& recording, const ResampleOptions& options);
+
 // The recording on t_0 + k P, k = 0 … while ≤ the last time stamp; metadata kept, with
-// `resampled_period_s` added. Requires increasing t_s (read_recording checks it). Throws
-// InputError naming the source when the record is too short or the period too long for it.
+// `resampled_period_s` added and `sampling_period_s` set to P. Requires increasing t_s
+// (read_recording checks it). Throws InputError naming the source when the record is too short,
+// the period too long for it, or the cost past a ceiling (ResampleCost).
 Recording resample(const Recording& recording, const ResampleOptions& options);
 
 // Reads a recording whose time stamps only increase (any jitter); the reader for `resample`.

@@ -64,9 +64,12 @@ class JointCost : public ceres::CostFunction {
     const std::vector<double> z(parameters[0], parameters[0] + steps_.size());
     try {
       const std::vector<double> r = residuals_(z);
+      // Ceres is given finite numbers or a failed evaluation (it then shortens the step).
+      if (!std::all_of(r.begin(), r.end(), [](double v) { return std::isfinite(v); })) return false;
       std::copy(r.begin(), r.end(), residuals);
       if (jacobians && jacobians[0]) {
         const std::vector<double>& J = jacobian(z, r);
+        if (!std::all_of(J.begin(), J.end(), [](double v) { return std::isfinite(v); })) return false;
         std::copy(J.begin(), J.end(), jacobians[0]);
       }
     } catch (const std::exception&) {

@@ -82,6 +82,13 @@ class ModelEngine {
       s.n = d.size();
       s.n_fit = static_cast<std::size_t>(std::round(o.fit_fraction * static_cast<double>(s.n)));
       s.warm = std::min(s.n_fit / 2, static_cast<std::size_t>(std::ceil(o.warmup_s / d.h - 1e-9)));
+      // Both parts carry as many samples as a fit of the model needs (identification.cpp).
+      const std::size_t needed = 2 * (reduced::parameter_names(o.kind).size() + 1);
+      if (s.n_fit < needed || s.n - s.n_fit < needed) {
+        throw InputError(d.source + ": " + std::to_string(s.n) + " samples: too few to fit " + reduced::model_name(o.kind) +
+                         " on a fraction " + format_g(o.fit_fraction) + " of them and test it on the rest: expected at least " +
+                         std::to_string(needed) + " in each part");
+      }
       split_.push_back(s);
       heads_.push_back(reduced::leading_samples(d, s.n_fit));
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <nlopt.hpp>
@@ -41,7 +42,9 @@ FractionalFit refine(const BandData& d, double log_t, double lambda, double dela
   const unsigned dims = fixed_order ? 2 : 3;
   nlopt::opt opt(nlopt::LN_NELDERMEAD, dims);
   std::vector<double> x = fixed_order ? std::vector<double>{log_t, delay} : std::vector<double>{log_t, delay, lambda};
-  std::vector<double> lower = {std::log(1e-4), 0.0}, upper = {std::log(1e5), max_delay};
+  // NLopt is called with lower < upper on every parameter and sees only finite costs (a response
+  // G_k = 0 makes a ratio infinite: Nelder–Mead then only compares it, as the largest number).
+  std::vector<double> lower = {std::log(1e-4), 0.0}, upper = {std::log(1e5), std::max(max_delay, 1e-9)};
   if (!fixed_order) {
     lower.push_back(0.1);
     upper.push_back(1.5);
@@ -56,7 +59,8 @@ FractionalFit refine(const BandData& d, double log_t, double lambda, double dela
   opt.set_min_objective(
       [](const std::vector<double>& p, std::vector<double>&, void* data) {
         const auto* c = static_cast<Context*>(data);
-        return cost(*c->d, std::exp(p[0]), c->fixed ? 1.0 : p[2], p[1], nullptr);
+        const double value = cost(*c->d, std::exp(p[0]), c->fixed ? 1.0 : p[2], p[1], nullptr);
+        return std::isfinite(value) ? value : std::numeric_limits<double>::max();
       },
       &context);
   opt.set_xtol_rel(1e-8);

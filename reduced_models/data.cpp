@@ -1,46 +1,22 @@
 #include "reduced_models/data.hpp"
 
+#include "core/declared_units.hpp"
 #include "core/format.hpp"
+#include "core/metadata.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <numeric>
 #include <sstream>
-#include <tuple>
 
 namespace canalsim::reduced {
 namespace {
 
+constexpr double kMinResponseMm = 1.0e-6;
+
+// The recording's operating_opening_mm metadata (checked by the reader, core/metadata.hpp).
 std::optional<double> operating_point_mm(const Recording& recording) {
-  const std::string text = recording.meta("operating_opening_mm");
-  if (text.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || !std::isfinite(value)) return std::nullopt;
-  return value;
-}
-
-
-// The declared unit and scale of the command ("u") or the levels ("y"): (unit, mm per unit).
-std::pair<std::string, double> declared_unit(const Recording& recording, const std::string& source,
-                                             const std::string& which) {
-  const std::string unit_key = which + "_unit", scale_key = which + "_scale_mm_per_unit";
-  const std::string unit = recording.meta(unit_key), text = recording.meta(scale_key);
-  if (text.empty()) {
-    if (!unit.empty() && unit != "mm") {
-      throw InputError(source + ": metadata " + unit_key + ": " + unit + " needs " + scale_key +
-                       " (how many mm one " + unit + " is, e.g. # " + scale_key + ": 0.13)");
-    }
-    return {"mm", 1.0};
-  }
-  char* end = nullptr;
-  const double scale = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !std::isfinite(scale) || !(scale > 0.0)) {
-    throw InputError(source + ": metadata " + scale_key + ": '" + text +
-                     "', expected a positive number of mm per unit");
-  }
-  return {unit.empty() ? "unit" : unit, scale};
+  return metadata_number(recording, "operating_opening_mm");
 }
 
 }  // namespace
@@ -67,29 +43,28 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
   if (const Status status = options.validate(); !status) throw InputError(source + ": data options: " + status.message());
   ExperimentData d;
   d.source = source;
-  d.t_s = recording.column(columns::time);
-  d.u_mm = recording.column(columns::gate_command);
-  d.y_dwe_mm = recording.column(columns::level_downstream_end);
+  // The columns in mm, each checked against kMaxRecordedMagnitude after its declared unit applies.
+  const Recording in_mm = in_millimetres(recording);
+  d.t_s = in_mm.column(columns::time);
+  d.u_mm = in_mm.column(columns::gate_command);
+  d.y_dwe_mm = in_mm.column(columns::level_downstream_end);
   if (d.t_s.size() < 2) {
     throw InputError(source + ": expected at least two samples, found " +
                      std::to_string(d.t_s.size()));
   }
   d.h = recording.sample_period();
-  if (recording.has(columns::upstream_level)) {
-    d.y_up_mm = recording.column(columns::upstream_level);
+  if (in_mm.has(columns::upstream_level)) {
+    d.y_up_mm = in_mm.column(columns::upstream_level);
   } else if (options.upstream_level_mm) {
     d.y_up_mm.assign(d.size(), *options.upstream_level_mm);
     d.y_up_is_constant_option = true;
   }
-  if (recording.has(columns::gate_position)) d.x_up_mm = recording.column(columns::gate_position);
-  std::tie(d.u_unit, d.u_scale_mm_per_unit) = declared_unit(recording, source, "u");
-  std::tie(d.y_unit, d.y_scale_mm_per_unit) = declared_unit(recording, source, "y");
-  for (double& v : d.u_mm) v *= d.u_scale_mm_per_unit;
-  for (double& v : d.x_up_mm) v *= d.u_scale_mm_per_unit;
-  for (double& v : d.y_dwe_mm) v *= d.y_scale_mm_per_unit;
-  if (!d.y_up_is_constant_option) {
-    for (double& v : d.y_up_mm) v *= d.y_scale_mm_per_unit;
-  }
+  if (in_mm.has(columns::gate_position)) d.x_up_mm = in_mm.column(columns::gate_position);
+  const DeclaredUnit u_unit = declared_unit(recording, "u"), y_unit = declared_unit(recording, "y");
+  d.u_unit = u_unit.name;
+  d.u_scale_mm_per_unit = u_unit.mm_per_unit;
+  d.y_unit = y_unit.name;
+  d.y_scale_mm_per_unit = y_unit.mm_per_unit;
 
   const auto [umin, umax] = std::minmax_element(d.u_mm.begin(), d.u_mm.end());
   if (*umax - *umin <= options.min_excitation_mm) {
@@ -102,6 +77,12 @@ ExperimentData prepare_data(const Recording& recording, const DataOptions& optio
     throw InputError(source + ": y_dwe_mm is constant (" + format_g(*ymin) +
                      " mm in every row): the level never responds to the input, so no model can be "
                      "identified and the Nrmse (eq. 19) is undefined (expected the recorded downstream level)");
+  }
+  // A response no level sensor resolves (a nanometre) is rounding noise or a unit mistake, and its
+  // squares underflow in the fits' costs.
+  if (*ymax - *ymin < kMinResponseMm) {
+    throw InputError(source + ": y_dwe_mm varies by only " + format_g(*ymax - *ymin) + " mm: expected a response of at least " +
+                     format_g(kMinResponseMm) + " mm (check the unit, or y_scale_mm_per_unit)");
   }
   // The operating point the input moves about: the recording's `operating_opening_mm` metadata
   // when it has one (the canal settled there before the PRBS started, which may begin on +5 mm),

@@ -7,6 +7,8 @@
 #include <nlopt.hpp>
 #include <stdexcept>
 
+#include "core/format.hpp"
+
 namespace canalsim::reduced::detail {
 
 bool output_linear_in_gain(ModelKind kind) {
@@ -328,11 +330,16 @@ Model Problem::run_nlopt(const Model& start, double L_lo, double L_hi, bool alte
   const std::size_t dim = free_.size();
   Model best = start;
   best_cost = kInf;
+  // NLopt only ever sees a finite cost: a model that overflows (an unstable lag, a gain of 1e300
+  // against levels of 1e-300) costs a penalty above the start's, not an inf or NaN that corrupts
+  // BOBYQA's quadratic model.
+  double penalty = kInf;
   auto evaluate = [&](const std::vector<double>& x) {
     Model m = base_;
     m.p.K = start.p.K;
     for (std::size_t i = 0; i < dim; ++i) set_parameter(m.p, free_[i], x[i]);
     const double c = cost(m);
+    if (!std::isfinite(c)) return penalty;
     if (c < best_cost) {
       best_cost = c;
       best = m;
@@ -368,6 +375,20 @@ Model Problem::run_nlopt(const Model& start, double L_lo, double L_hi, bool alte
     step[i] = s > 0.0 ? s : 1e-6;
   }
   evaluate(x);  // the start: the search never returns a model worse than it
+  if (!std::isfinite(best_cost)) {
+    converged = false;
+    message = "the cost is not finite at the start (the recordings are degenerate or out of range for this model)";
+    return best;
+  }
+  penalty = 10.0 * std::max(best_cost, 1.0);
+  for (std::size_t i = 0; i < dim; ++i) {
+    if (!(lo[i] < hi[i]) || !std::isfinite(x[i]) || !std::isfinite(step[i])) {
+      converged = false;
+      message = "parameter " + free_[i] + ": bounds [" + format_g(lo[i]) + ", " + format_g(hi[i]) +
+                "] leave nothing to search";
+      return best;
+    }
+  }
   nlopt::algorithm algorithm = nlopt::LN_BOBYQA;
   if (options_.optimizer == Optimizer::sbplx) algorithm = nlopt::LN_SBPLX;
   if (options_.optimizer == Optimizer::nelder_mead) algorithm = nlopt::LN_NELDERMEAD;

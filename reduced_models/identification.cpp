@@ -20,7 +20,15 @@ void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>
                         const FitOptions& options) {
   if (data.empty()) throw InputError("fit: no recordings given");
   if (const Status status = options.validate(); !status) throw InputError("fit options: " + status.message());
+  // Each recording holds at least twice as many samples as the model has unknowns (its
+  // parameters and the operating point): fewer fit anything, and the figures mean nothing.
+  const std::size_t needed = 2 * (parameter_names(kind).size() + 1);
   for (const auto* d : data) {
+    if (d->size() < needed) {
+      throw InputError(d->source + ": " + std::to_string(d->size()) + " samples: too few to fit " + model_name(kind) +
+                       " (" + std::to_string(parameter_names(kind).size()) + " parameters and the operating point): " +
+                       "expected at least " + std::to_string(needed));
+    }
     if (uses_upstream_level(kind)) require_upstream_level(*d, model_name(kind));
     const auto& L = options.bounds.L;
     if (L.lower >= d->duration()) {
@@ -109,7 +117,8 @@ std::size_t shortest_input_hold(const ExperimentData& d) {
 }
 
 // Upper bounds left at +∞ ("from the data") made concrete: T and T2 up to ten times the longest
-// recording, L up to half the shortest one.
+// recording, L up to half the shortest one. A parameter whose bounds leave one value is held
+// there: the optimisers need lower < upper on every parameter they move.
 FitOptions resolve_bounds(FitOptions options, const std::vector<const ExperimentData*>& data) {
   double longest = 0.0, shortest = kInf;
   for (const auto* d : data) {
@@ -121,6 +130,13 @@ FitOptions resolve_bounds(FitOptions options, const std::vector<const Experiment
     if (std::isinf(spec->upper)) spec->upper = std::max(spec->lower, 10.0 * longest);
   }
   if (std::isinf(b.L.upper)) b.L.upper = std::max(b.L.lower, 0.5 * shortest);
+  for (const std::string& name : {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz"}) {
+    ParameterSpec& spec = b[name];
+    if (!spec.fixed && spec.lower == spec.upper) {
+      spec.fixed = true;
+      spec.initial = spec.lower;
+    }
+  }
   return options;
 }
 
@@ -180,7 +196,9 @@ class FitSession {
                            polish_bracket_s_);
       count(whole);
     }
-    const bool least_squares = options_.criterion == Criterion::least_squares && output_linear_in_gain(kind);
+    // The polish profiles K out in closed form: a K held fixed keeps the IAE fit.
+    const bool least_squares = options_.criterion == Criterion::least_squares && output_linear_in_gain(kind) &&
+                               !options_.bounds.K.fixed;
     FitResult r = least_squares ? polish_least_squares(kind, model, converged, message)
                                 : result(model, converged, message);
     // A model that contains another must not fit worse than it: the inner model's fit, written
@@ -380,6 +398,21 @@ const char* const kNames[] = {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "
 
 }  // namespace
 
+
+double estimate_fit_operations(ModelKind kind, const std::vector<ExperimentData>& data, const FitOptions& options,
+                               double fits) {
+  constexpr double kSimulationsPerFit = 300.0;
+  double per_simulation = 0.0;
+  for (const ExperimentData& d : data) {
+    const auto n = static_cast<double>(d.size());
+    const auto& gl = options.simulation.gl;
+    const double terms = !is_fractional(kind)              ? 10.0
+                         : gl.memory == GlMemory::full     ? 20.0 * std::pow(std::log2(std::max(n, 2.0)), 2.0)
+                                                           : std::min(n, static_cast<double>(gl.memory_terms));
+    per_simulation += n * terms;
+  }
+  return fits * kSimulationsPerFit * per_simulation;
+}
 
 ParameterSpec& FitBounds::operator[](const std::string& name) {
   return const_cast<ParameterSpec&>(std::as_const(*this)[name]);

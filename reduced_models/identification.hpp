@@ -129,8 +129,19 @@ struct FitResult {
   std::string message;                       // optimiser status, for reports
 };
 
+// What fitting `kind` to these recordings `fits` times over takes, known before it starts: the
+// multiply-adds of the model simulations, about 300 simulations of every recording a fit (the
+// least-squares polish on the whole record; the searches run on at most search_samples), each
+// samples × memory terms for a fractional model (Grünwald–Letnikov), samples × 20 log²(samples)
+// with the full memory, samples × 10 for an integer-order one (exact zero-order hold). Past
+// kMaxFitOperations (about two minutes here) the CLI refuses the fit unless --allow-long.
+double estimate_fit_operations(ModelKind kind, const std::vector<ExperimentData>& data, const FitOptions& options,
+                               double fits = 1.0);
+inline constexpr double kMaxFitOperations = 2.0e11;
+
 // Fits `kind` to one recording. Throws InputError naming the recording (missing y_up for a
-// nonlinear model) or naming the bound that excludes every feasible model.
+// nonlinear model), one with fewer than twice as many samples as the model has unknowns, or
+// naming the bound that excludes every feasible model.
 FitResult fit(ModelKind kind, const ExperimentData& data, const FitOptions& options = {});
 // Nominal model: one parameter set minimising IAE_c over all recordings (eq. 21).
 FitResult fit_nominal(ModelKind kind, const std::vector<ExperimentData>& data,

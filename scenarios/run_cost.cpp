@@ -20,6 +20,14 @@ constexpr double kCellUpdatesPerSecond = 3.0e7;
 
 }  // namespace
 
+RunCost estimate_replay_cost(const Scenario& s, const Recording& recording) {
+  ExperimentSpec replay;
+  replay.name = recording.source;
+  const auto& t = recording.column(columns::time);
+  replay.duration_s = t.back() - t.front();
+  return estimate_run_cost(s, replay, recording.sample_period());
+}
+
 RunCost estimate_run_cost(const Scenario& s, const ExperimentSpec& e, double h) {
   RunCost cost;
   cost.samples = std::floor(e.duration_s / h + 1e-9) + 1.0;

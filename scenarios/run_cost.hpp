@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <string>
 
+#include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 
 namespace canalsim::scenarios {
@@ -30,6 +31,10 @@ inline constexpr double kMaxSamples = 1.0e9;
 // c = sqrt(g h) of a pool filled to its wall height (the fastest wave a pool within its banks
 // carries; |u| is of the same order in subcritical canals), so the estimate errs towards more steps.
 RunCost estimate_run_cost(const Scenario& scenario, const ExperimentSpec& experiment, double sample_period_s);
+
+// One replay of `recording` through `scenario`: a run of the recording's duration sampled at its
+// period. Calibration and diagnosis replay each recording many times; their callers multiply.
+RunCost estimate_replay_cost(const Scenario& scenario, const Recording& recording);
 
 // Throws InputError naming the scenario, experiment and keys when the run yields fewer than two
 // samples, exceeds kMaxSamples, or (unless allow_long) exceeds a ceiling above.

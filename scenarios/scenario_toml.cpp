@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/declared_units.hpp"
 #include "core/recording.hpp"
 #include "scenarios/toml_table.hpp"
 
@@ -170,7 +171,7 @@ InputSpec read_input(TomlTable t) {
     in.file = beside_scenario(t.file(), given);
     // Read now, so that a missing or malformed series stops the run before any output is written.
     try {
-      (void)read_recording(in.file, input_series_columns());
+      (void)in_millimetres(read_recording(in.file, input_series_columns()));
     } catch (const InputError& e) {
       t.fail_value("file", "\"" + given + "\"", e.what());
     }

@@ -1,6 +1,8 @@
 #include "scenarios/simulate.hpp"
 
+#include "core/declared_units.hpp"
 #include "core/format.hpp"
+#include "core/metadata.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -98,16 +100,31 @@ std::shared_ptr<gates::GateOperation> operation_for(const GateSpec& g,
                                                 command(0.0));
 }
 
-std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const Drive& drive,
+// An experiment's input file (`kind = "file"`) in mm: its declared units applied.
+Recording read_input_file(const InputSpec& in) {
+  return in_millimetres(read_recording(in.file, input_series_columns()));
+}
+
+// The supply upstream of the head gate. A recorded upstream level comes from the recording being
+// replayed, else from the experiment's input file.
+std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const ExperimentSpec& e, const Drive& drive,
                                            std::shared_ptr<gates::ReservoirSupply>* reservoir) {
   const UpstreamSpec& u = s.upstream;
   const bool recorded = u.kind == UpstreamKind::recorded || drive.use_recorded_upstream;
   if (recorded) {
-    if (!drive.recording) {
-      throw InputError(s.source + ": upstream.kind = \"recorded\" needs a recording with a y_up_mm column to drive it");
+    std::optional<Recording> input_file;
+    if (!drive.recording && e.input.kind == InputKind::file) input_file = read_input_file(e.input);
+    const Recording* levels = drive.recording ? drive.recording : input_file ? &*input_file : nullptr;
+    if (!levels) {
+      throw InputError(s.source + ": experiment " + e.name + ": upstream.kind = \"recorded\" needs a recording with a " +
+                       "y_up_mm column to drive it (an input of kind = \"file\", or a recording replayed)");
     }
-    const auto series = SeriesSignal::from_recording(*drive.recording, columns::upstream_level);
-    std::vector<double> t = drive.recording->column(columns::time), y(t.size());
+    if (!levels->has(columns::upstream_level)) {
+      throw InputError(levels->source + ": missing column y_up_mm: upstream.kind = \"recorded\" (" + s.source +
+                       ") drives the head gate's upstream level with it");
+    }
+    const auto series = SeriesSignal::from_recording(*levels, columns::upstream_level);
+    std::vector<double> t = levels->column(columns::time), y(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) y[i] = series.value(t[i]);
     return std::make_shared<gates::SeriesLevelSupply>(std::move(t), std::move(y));
   }
@@ -210,10 +227,8 @@ class RecordedCommand final : public Signal {
  public:
   explicit RecordedCommand(const Recording& recording)
       : series_(SeriesSignal::from_recording(recording, columns::gate_command, Interpolation::zero_order_hold)) {
-    const std::string meta = recording.meta("operating_opening_mm");
-    char* end = nullptr;
-    const double rest_mm = meta.empty() ? NAN : std::strtod(meta.c_str(), &end);
-    rest_ = std::isfinite(rest_mm) && end != meta.c_str() ? rest_mm * kMm : series_.value(0.0);
+    const std::optional<double> rest_mm = metadata_number(recording, "operating_opening_mm");
+    rest_ = rest_mm ? *rest_mm * kMm : series_.value(0.0);
   }
   double value(double t) const override { return t < 0.0 ? rest_ : series_.value(t); }
   std::vector<double> jumps(double from, double to) const override {
@@ -249,7 +264,7 @@ SignalPtr command_input(const ExperimentSpec& e, const Drive& drive) {
     case InputKind::step: return std::make_shared<StepSignal>(op, in.amplitude_mm * kMm, in.start_s);
     case InputKind::ramp: return std::make_shared<RampSignal>(op, in.amplitude_mm * kMm, in.start_s, in.ramp_duration_s);
     case InputKind::file: {
-      const Recording rec = read_recording(in.file, input_series_columns());
+      const Recording rec = read_input_file(in);
       return std::make_shared<SeriesSignal>(
           SeriesSignal::from_recording(rec, columns::gate_command, Interpolation::zero_order_hold));
     }
@@ -272,7 +287,7 @@ BuiltCanal build_canal(const Scenario& input, const ExperimentSpec& e, const Dri
   b.command = command_input(e, drive);
   const auto command = [signal = b.command](double t) { return signal->value(t); };
   if (s.head_gate) {
-    b.supply = make_supply(s, drive, &b.reservoir);
+    b.supply = make_supply(s, e, drive, &b.reservoir);
     auto op = operation_for(*s.head_gate, command);
     b.head_gate = std::make_shared<gates::HeadGateBoundary>(gate_geometry(*s.head_gate), b.supply, op);
     check(b.canal.set_boundary(0, solver::End::upstream, b.head_gate), s.source + ": head_gate");
@@ -346,6 +361,40 @@ struct InitialState {
   double progress_weight = 0.0;  // share of the run's progress spent settling
 };
 
+// A warning through the caller's channel, else on stderr.
+void warn(const SimulateOptions& options, const std::string& message) {
+  if (options.warning) {
+    options.warning(message);
+  } else {
+    std::fprintf(stderr, "canalsim: warning: %s\n", message.c_str());
+  }
+}
+
+// An input file that asks the gate for openings it cannot reach, or ends before the experiment
+// does, is run as the gate and the hold make it (clipped to the range, the last value held), and
+// says so.
+void warn_about_input_file(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
+  if (e.input.kind != InputKind::file || options.drive.recording) return;
+  const Recording rec = read_input_file(e.input);
+  const auto& t = rec.column(columns::time);
+  const auto& u = rec.column(columns::gate_command);
+  const std::string what = s.source + ": experiment " + e.name + ": input file " + rec.source;
+  const auto [lowest, highest] = std::minmax_element(u.begin(), u.end());
+  double max_opening_mm = -1.0;
+  if (s.head_gate && s.head_gate->controlled) max_opening_mm = s.head_gate->max_opening_m / kMm;
+  for (const GateSpec& g : s.gates) {
+    if (max_opening_mm < 0.0 && g.controlled) max_opening_mm = g.max_opening_m / kMm;
+  }
+  if (max_opening_mm >= 0.0 && (*lowest < 0.0 || *highest > max_opening_mm)) {
+    warn(options, what + ": u_mm spans " + format_g(*lowest) + " .. " + format_g(*highest) +
+                      " mm, outside the gate's range [0, " + format_g(max_opening_mm) + "] mm: the gate stops at its limits");
+  }
+  if (t.front() > 0.0 || t.back() < e.duration_s) {
+    warn(options, what + ": t_s covers " + format_g(t.front()) + " .. " + format_g(t.back()) + " s of the experiment's 0 .. " +
+                      format_g(e.duration_s) + " s: the command holds its first and last values outside");
+  }
+}
+
 // Newton failed: the experiment starts from `marching` seconds of time marching instead. Never
 // silent — an error when the caller requires the steady state, else a warning naming the
 // opening held and the levels reached (first and last cell of every pool).
@@ -359,13 +408,7 @@ void warn_marched_start(const BuiltCanal& b, const Scenario& s, const Experiment
     state += (r ? "; " : " ") + format_g(reach.level(0) / kMm) + " .. " +
              format_g(reach.level(reach.cells() - 1) / kMm) + " mm";
   }
-  const std::string message = what + "; it starts after " + format_g(marching) +
-                              " s of time marching instead, from " + state;
-  if (options.warning) {
-    options.warning(message);
-  } else {
-    std::fprintf(stderr, "canalsim: warning: %s\n", message.c_str());
-  }
+  warn(options, what + "; it starts after " + format_g(marching) + " s of time marching instead, from " + state);
 }
 
 // Brings the canal to the steady state of its operating point at t = 0 and presets the
@@ -515,6 +558,7 @@ solver::SteadyStateOptions initial_steady_state_options(const Scenario& s, const
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
   const SensorSpec sensors = e.sensors.value_or(s.sensors);
   check_run_cost(s, e, sensors.period_s, options.allow_long_run);
+  warn_about_input_file(s, e, options);
   BuiltCanal b = build_canal(s, e, options.drive);
   const bool fixed_input = e.input.kind == InputKind::constant && !options.drive.recording;
   if (!b.driven && !fixed_input) throw InputError(s.source + ": no gate has controlled = true: nothing to drive");

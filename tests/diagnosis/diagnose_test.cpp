@@ -136,10 +136,12 @@ TEST(Diagnose, MismatchedRecordingsAreNamedWithTheReason) {
   missing.set_column("t_s", t);
   missing.set_column("u_mm", u);
   const auto problems = check_recordings(lab, {r, missing});
-  ASSERT_EQ(problems.size(), 3u);
+  ASSERT_EQ(problems.size(), 4u);
   EXPECT_NE(problems[0].find("bad.csv: sampled every 0.2 s"), std::string::npos) << problems[0];
   EXPECT_NE(problems[1].find("u_mm = 80"), std::string::npos) << problems[1];
-  EXPECT_NE(problems[2].find("missing.csv: missing channel(s) y_dwe_mm"), std::string::npos) << problems[2];
+  // A level that never moves has no response (its Nrmse is -inf): named, not diagnosed.
+  EXPECT_NE(problems[2].find("bad.csv: y_dwe_mm is 40 mm in every row"), std::string::npos) << problems[2];
+  EXPECT_NE(problems[3].find("missing.csv: missing channel(s) y_dwe_mm"), std::string::npos) << problems[3];
   EXPECT_THROW(diagnose(lab, {r}), InputError);
 }
 

@@ -39,13 +39,25 @@ TEST(PrepareData, UsesAGivenOperatingPoint) {
 }
 
 // A simulated experiment settles at the operating point and then starts its PRBS, possibly on
-// the +5 mm bit: the metadata, not the first command, is the point the canal rested at.
+// the +5 mm bit: the metadata, not the first command, is the point the canal rested at. A value
+// that is not an opening is an error naming the key, never silently replaced by the first command
+// (which changes the fit).
 TEST(PrepareData, TakesTheOperatingPointFromTheRecordingsMetadata) {
   Recording r = recording({20, 20, 10, 20}, {40, 40, 40, 41});
+  EXPECT_DOUBLE_EQ(prepare_data(r).u0_mm, 20.0);
   r.set_meta("operating_opening_mm", "15");
   EXPECT_DOUBLE_EQ(prepare_data(r).u0_mm, 15.0);
-  r.set_meta("operating_opening_mm", "not a number");
-  EXPECT_DOUBLE_EQ(prepare_data(r).u0_mm, 20.0);
+  for (const char* bad : {"not a number", "nan", "1e300", "-5", "15 mm"}) {
+    r.set_meta("operating_opening_mm", bad);
+    try {
+      (void)prepare_data(r);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("metadata operating_opening_mm: '" + std::string(bad) + "': expected"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(PrepareData, FillsAConstantUpstreamLevelOnlyWhenTheColumnIsAbsent) {
@@ -132,7 +144,7 @@ TEST(DeclaredUnits, AUnitWithoutAScaleOrABadScaleIsAnErrorNamingTheKey) {
     prepare_data(rec);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1', expected a positive number"),
+    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1': expected a number of mm in [1e-06, 1e+06]"),
               std::string::npos) << e.what();
   }
 }
