@@ -192,9 +192,40 @@ void keep_backup(const std::filesystem::path& file, const std::filesystem::path&
 
 }  // namespace
 
+namespace {
+
+// `file` and every path its symbolic links lead to, in order (at most 40 links, as the kernel).
+// Throws InputError for a longer chain (a loop) or a link that cannot be read.
+std::vector<std::filesystem::path> link_chain(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> chain{file};
+  for (int hops = 0; hops < 40; ++hops) {
+    std::error_code ec;
+    if (!fs::is_symlink(fs::symlink_status(chain.back(), ec))) return chain;
+    const fs::path target = fs::read_symlink(chain.back(), ec);
+    if (ec) throw InputError(file.string() + ": cannot read the symbolic link: " + ec.message());
+    chain.push_back((target.is_absolute() ? target : chain.back().parent_path() / target).lexically_normal());
+  }
+  throw InputError(file.string() + ": too many levels of symbolic links");
+}
+
+}  // namespace
+
 std::string replaceable_file_problem(const std::filesystem::path& file) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  // The process's own descriptors (/proc/self/fd/1 is whatever stdout is) and the kernel's
+  // directories hold no file of the user's: never replaced, whatever they resolve to.
+  const std::vector<fs::path> chain = link_chain(file);
+  for (std::size_t i = 0; i < chain.size(); ++i) {
+    const std::string text = fs::absolute(chain[i], ec).lexically_normal().string();
+    for (const std::string system : {"/proc/", "/sys/", "/dev/"}) {
+      if (text.rfind(system, 0) == 0) {
+        return std::string(i == 0 ? "is in " : "links to " + text + ", in ") + system.substr(0, system.size() - 1) +
+               ": expected a regular file (or a new path) to write";
+      }
+    }
+  }
   const fs::file_status status = fs::status(file, ec);  // follows a symbolic link to its target
   if (ec || !fs::exists(status) || fs::is_regular_file(status)) return "";
   const char* kind = fs::is_directory(status)  ? "a directory"
@@ -206,13 +237,9 @@ std::string replaceable_file_problem(const std::filesystem::path& file) {
   return std::string(linked ? "links to " : "is ") + kind + ": expected a regular file (or a new path) to write";
 }
 
-std::filesystem::path written_path(const std::filesystem::path& file) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_symlink(fs::symlink_status(file, ec))) return file;
-  const fs::path target = fs::weakly_canonical(file, ec);
-  return ec ? file : target;
-}
+// The file a write to `file` replaces: `file`, or the end of its chain of symbolic links (which
+// may not exist yet: a dangling link is written through to its target, or fails there).
+std::filesystem::path written_path(const std::filesystem::path& file) { return link_chain(file).back(); }
 
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
   write_files_atomically({{file, contents}});

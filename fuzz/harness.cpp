@@ -1,16 +1,24 @@
 #include "fuzz/harness.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "cli/command_line.hpp"
 #include "core/errors.hpp"
 #include "core/recording.hpp"
+#include "core/resample.hpp"
 #include "scenarios/scenario_toml.hpp"
 
 namespace canalsim::fuzz {
@@ -21,23 +29,122 @@ namespace {
   std::abort();
 }
 
-// Restores std::cout and std::cerr on every exit path.
+// Captures std::cout and std::cerr, and restores them on every exit path.
 class CapturedStreams {
  public:
-  CapturedStreams() : out_(std::cout.rdbuf(discarded_.rdbuf())), err_(std::cerr.rdbuf(captured_.rdbuf())) {}
+  CapturedStreams() : out_(std::cout.rdbuf(captured_out_.rdbuf())), err_(std::cerr.rdbuf(captured_err_.rdbuf())) {}
   ~CapturedStreams() {
     std::cout.rdbuf(out_);
     std::cerr.rdbuf(err_);
   }
-  std::string err() const { return captured_.str(); }
+  std::string out() const { return captured_out_.str(); }
+  std::string err() const { return captured_err_.str(); }
 
  private:
-  std::ostringstream discarded_, captured_;
+  std::ostringstream captured_out_, captured_err_;
   std::streambuf* out_;
   std::streambuf* err_;
 };
 
+// Runs `arguments` (without the program name) as `canalsim` would: the exit status, stdout, stderr.
+struct Run {
+  int code = 0;
+  std::string out, err;
+};
+
+Run run_canalsim(const std::vector<std::string>& given) {
+  std::vector<std::string> arguments{"canalsim"};
+  arguments.insert(arguments.end(), given.begin(), given.end());
+  std::vector<char*> argv;
+  for (auto& a : arguments) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  CLI::App app{"canalsim"};
+  cli::add_all_commands(app);
+  Run run;
+  bool escaped = false;
+  {
+    CapturedStreams streams;
+    try {
+      run.code = cli::run_command_line(app, static_cast<int>(arguments.size()), argv.data());
+    } catch (...) {
+      escaped = true;
+    }
+    run.out = streams.out();
+    run.err = streams.err();
+  }
+  if (escaped) breach("an exception escaped the command line");
+  return run;
+}
+
+// The command's contract: status 0 or 1, one error line on failure, finite numbers on success.
+void check_contract(const Run& run, const std::string& command) {
+  if (run.code != 0 && run.code != 1) breach(command + ": exit status " + std::to_string(run.code));
+  if (run.code == 1) {
+    std::size_t errors = 0;
+    for (std::size_t at = run.err.find("canalsim: error: "); at != std::string::npos;
+         at = run.err.find("canalsim: error: ", at + 1)) {
+      ++errors;
+    }
+    const std::size_t last = run.err.rfind("canalsim: error: ");
+    if (errors != 1 || run.err.find('\n', last) != run.err.size() - 1) {
+      breach(command + ": the error is not one line: " + run.err.substr(0, 300));
+    }
+    return;
+  }
+  static const std::regex non_finite(R"((^|[^A-Za-z])-?(nan|inf)([^A-Za-z]|$))", std::regex::icase);
+  if (std::regex_search(run.out, non_finite)) breach(command + ": a non-finite number printed with status 0: " + run.out.substr(0, 600));
+}
+
+constexpr const char* kModels[] = {"liom", "sopd", "lfom", "nliom-f", "nlfom-f", "nliom-s", "nlfom-s", "hybrid", "id", "idz"};
+constexpr std::size_t kModelCount = std::size(kModels);
+constexpr const char* kPeriods[] = {"0.01", "0.13", "0.5", "3", "1e-6"};
+
 }  // namespace
+
+void fitting_input(std::string_view bytes) {
+  if (bytes.size() < 2) return;
+  const auto action = static_cast<unsigned char>(bytes[0]) % (kModelCount + 2);
+  const auto choice = static_cast<unsigned char>(bytes[1]);
+  const std::string text(bytes.substr(2));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("canalsim_fitting_fuzz_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string recording = (dir / "recording.csv").string(), output = (dir / "out.csv").string();
+  std::ofstream(recording, std::ios::binary | std::ios::trunc) << text;
+
+  std::vector<std::string> arguments;
+  if (action < kModelCount) {
+    arguments = {"fit", "-m", kModels[action], "--threads", "1", recording};
+  } else if (action == kModelCount) {
+    arguments = {"diagnose", "--model", kModels[choice % kModelCount], "--threads", "1", recording};
+  } else {
+    // Resampling is bounded by ceilings (core/resample.hpp) that allow minutes of work; only the
+    // inputs that stay well below them run here, so that a slow but legitimate resampling is not
+    // taken for a hang. The refusals past the ceilings run in any case.
+    const std::string period = kPeriods[choice % std::size(kPeriods)];
+    try {
+      const Recording in = parse_recording(text, recording, [] {
+        RecordingReadOptions o;
+        o.required = {columns::time};
+        o.uniform_tolerance = std::numeric_limits<double>::infinity();
+        return o;
+      }());
+      ResampleOptions o;
+      o.period_s = std::stod(period);
+      const ResampleCost cost = estimate_resample_cost(in, o);
+      const bool past_ceiling = cost.rows > kMaxResampledRows || cost.fine_samples > kMaxFineSamples ||
+                                cost.filter_operations > kMaxFilterOperations;
+      if (!past_ceiling && (cost.rows > 2e5 || cost.filter_operations > 2e7)) return;
+    } catch (const InputError&) {
+    }
+    arguments = {"resample", recording, "-o", output, "--period", period};
+  }
+  std::string command;
+  for (const auto& a : arguments) command += (command.empty() ? "" : " ") + a;
+  check_contract(run_canalsim(arguments), command);
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+}
 
 void scenario_input(std::string_view bytes) {
   try {

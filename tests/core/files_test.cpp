@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -111,6 +112,63 @@ void expect_signal_removes_temporary(int signal_number) {
 
 TEST(Files, SigtermRemovesTemporariesAndRestoresBackups) { expect_signal_removes_temporary(SIGTERM); }
 TEST(Files, SigintRemovesTemporariesAndRestoresBackups) { expect_signal_removes_temporary(SIGINT); }
+// A closed terminal ends a run like Ctrl-C does.
+TEST(Files, SighupRemovesTemporariesAndRestoresBackups) { expect_signal_removes_temporary(SIGHUP); }
+
+// Only regular files are replaced: a device, a FIFO, or a link to one is refused before anything
+// is written (as root, renaming over /dev/full would replace the system's device with a file).
+TEST(Files, ADeviceAFifoOrALinkToOneIsNeverReplaced) {
+  const fs::path dir = scratch("not_regular");
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  fs::create_symlink("/dev/null", dir / "to_null");
+  put(dir / "a.txt", "old a");
+  for (const fs::path& target : {fs::path("/dev/null"), dir / "fifo", dir / "to_null"}) {
+    try {
+      canalsim::write_files_atomically({{dir / "a.txt", "new a"}, {target, "x"}});
+      ADD_FAILURE() << target << " was replaced";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("expected a regular file (or a new path) to write"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_TRUE(fs::is_fifo(dir / "fifo"));
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  EXPECT_EQ(text_of(dir / "a.txt"), "old a");
+  EXPECT_EQ(entries(dir), 3u);  // fifo, to_null, a.txt: no temporary, no backup
+  fs::remove_all(dir);
+}
+
+// A symbolic link is written through: its target gets the contents, the link stays a link, and
+// the replaced file keeps its permissions. A dangling link into a missing directory fails the
+// whole set, which then touches nothing.
+TEST(Files, ALinkIsWrittenThroughAndTheFileKeepsItsMode) {
+  const fs::path dir = scratch("link");
+  put(dir / "target.json", "old");
+  fs::permissions(dir / "target.json", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  fs::create_symlink("target.json", dir / "out.json");
+  canalsim::write_files_atomically({{dir / "out.json", "new"}});
+  EXPECT_TRUE(fs::is_symlink(dir / "out.json"));
+  EXPECT_EQ(text_of(dir / "target.json"), "new");
+  EXPECT_EQ(fs::status(dir / "target.json").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  fs::create_symlink("missing/r.html", dir / "dangling.html");
+  put(dir / "a.txt", "old a");
+  EXPECT_THROW(canalsim::write_files_atomically({{dir / "a.txt", "new a"}, {dir / "dangling.html", "r"}}), InputError);
+  EXPECT_EQ(text_of(dir / "a.txt"), "old a");
+  EXPECT_TRUE(fs::is_symlink(dir / "dangling.html"));
+  EXPECT_EQ(entries(dir), 4u);  // target.json, out.json, dangling.html, a.txt
+  fs::remove_all(dir);
+}
+
+// Two names of one file in a set would lose one output: refused before anything is written.
+TEST(Files, TwoNamesOfOneFileAreRefused) {
+  const fs::path dir = scratch("twice");
+  fs::create_symlink("a.txt", dir / "b.txt");
+  EXPECT_THROW(canalsim::write_files_atomically({{dir / "a.txt", "1"}, {dir / "b.txt", "2"}}), InputError);
+  EXPECT_THROW(canalsim::write_files_atomically({{dir / "a.txt", "1"}, {dir / "." / "a.txt", "2"}}), InputError);
+  EXPECT_EQ(entries(dir), 1u);
+  fs::remove_all(dir);
+}
 
 TEST(Files, AReleasedGuardLeavesTheFile) {
   const fs::path dir = scratch("released");

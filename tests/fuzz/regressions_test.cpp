@@ -33,6 +33,7 @@ std::size_t replay(const std::string& target, const std::function<void(std::stri
 
 TEST(FuzzRegressions, ScenarioLoader) { EXPECT_GT(replay("scenario", canalsim::fuzz::scenario_input), 0u); }
 TEST(FuzzRegressions, RecordingReader) { EXPECT_GT(replay("recording", canalsim::fuzz::recording_input), 0u); }
+TEST(FuzzRegressions, Fitters) { EXPECT_GT(replay("fitting", canalsim::fuzz::fitting_input), 0u); }
 TEST(FuzzRegressions, CommandLineArguments) {
   EXPECT_GT(replay("cli_arguments", canalsim::fuzz::cli_arguments_input), 0u);
 }
