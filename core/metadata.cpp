@@ -29,10 +29,10 @@ constexpr std::array kKeys = {
     MetadataKey{"resampled_period_s", Type::number, kMinSamplePeriod, 1.0e6, false, "s",
                 "the period `canalsim resample` wrote the rows on; equals the t_s step"},
     MetadataKey{"u_unit", Type::text, 0, 0, false, "", "the unit u_mm and x_up_mm are recorded in (mm when absent)"},
-    MetadataKey{"u_scale_mm_per_unit", Type::number, 1.0e-6, 1.0e6, false, "mm",
+    MetadataKey{"u_scale_mm_per_unit", Type::number, 1.0e-6, 1.0e6, false, "mm per unit",
                 "millimetres per u_unit; 1 when u_unit is mm"},
     MetadataKey{"y_unit", Type::text, 0, 0, false, "", "the unit of the level columns (mm when absent)"},
-    MetadataKey{"y_scale_mm_per_unit", Type::number, 1.0e-6, 1.0e6, false, "mm",
+    MetadataKey{"y_scale_mm_per_unit", Type::number, 1.0e-6, 1.0e6, false, "mm per unit",
                 "millimetres per y_unit; 1 when y_unit is mm"},
     MetadataKey{"generator", Type::text, 0, 0, false, "", "the program that wrote the recording"},
     MetadataKey{"initial_state", Type::text, 0, 0, false, "", "how the simulation's initial state was found"},
@@ -52,15 +52,20 @@ constexpr std::array kKeys = {
     MetadataKey{"seed", Type::integer, 0, 4294967295.0, false, "", "the PRBS's seed"},
 };
 
-std::string range_text(const MetadataKey& k) {
-  return std::string(k.above_low ? "(" : "[") + format_g(k.low) + ", " + format_g(k.high) + "]";
+}  // namespace
+
+std::string metadata_range_text(const MetadataKey& k) {
+  if (k.type == Type::text) return "text";
+  return std::string(k.above_low ? "(" : "[") + format_g(k.low, 10) + ", " + format_g(k.high, 10) + "]";
 }
+
+namespace {
 
 std::string expected_text(const MetadataKey& k) {
   const std::string what = k.type == Type::integer ? "an integer"
                            : k.unit.empty()        ? "a number"
                                                    : "a number of " + std::string(k.unit);
-  return "expected " + what + " in " + range_text(k);
+  return "expected " + what + " in " + metadata_range_text(k);
 }
 
 // The whole text as a finite number ("2x", "nan", "inf" and "" are not).

@@ -28,6 +28,9 @@ struct MetadataKey {
 // Every key canalsim knows, in the order docs/recording-format.md lists them.
 std::span<const MetadataKey> known_metadata_keys();
 
+// The range of a key as docs/recording-format.md writes it: "[0, 100000]", "(0, 3600]", "text".
+std::string metadata_range_text(const MetadataKey& key);
+
 // The key called `name`, or nullptr for a key canalsim does not know.
 const MetadataKey* find_metadata_key(std::string_view name);
 

@@ -3,6 +3,8 @@
 // naming the file, line and key. A value that fails is never silently replaced by a default.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "core/declared_units.hpp"
@@ -45,7 +47,7 @@ TEST(Metadata, AMalformedValueNamesFileLineAndKey) {
       {"# operating_opening_mm: -5", "r.csv:2: metadata operating_opening_mm: '-5': expected"},
       {"# initial_y_up_mm: nan", "r.csv:2: metadata initial_y_up_mm: 'nan': expected a number of mm in (0, 100000]"},
       {"# initial_y_up_mm: 0", "r.csv:2: metadata initial_y_up_mm: '0': expected"},
-      {"# u_scale_mm_per_unit: 1e300", "r.csv:2: metadata u_scale_mm_per_unit: '1e300': expected a number of mm in [1e-06, 1e+06]"},
+      {"# u_scale_mm_per_unit: 1e300", "r.csv:2: metadata u_scale_mm_per_unit: '1e300': expected a number of mm per unit in [1e-06, 1000000]"},
       {"# y_scale_mm_per_unit: 1e-300", "r.csv:2: metadata y_scale_mm_per_unit: '1e-300': expected"},
       {"# stages: 9.5", "r.csv:2: metadata stages: '9.5': expected an integer in [2, 20]"},
   };
@@ -94,6 +96,18 @@ TEST(Metadata, AValueOutOfRangeAfterItsUnitIsNamed) {
     EXPECT_NE(std::string(e.what()).find("r.csv:5: column y_dwe_mm: 2e+07 km is 2e+13 mm: expected a magnitude of at most 1e+12 mm"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// docs/recording-format.md lists every key with the range the reader enforces.
+TEST(Metadata, TheDocumentedTableIsTheReadersTable) {
+  std::ifstream in(std::string(CANALSIM_SOURCE_DIR) + "/docs/recording-format.md");
+  std::stringstream doc;
+  doc << in.rdbuf();
+  for (const MetadataKey& key : known_metadata_keys()) {
+    const std::string row = "| `" + std::string(key.name) + "` | " + std::string(key.unit) + " | " +
+                            metadata_range_text(key) + " | ";
+    EXPECT_NE(doc.str().find(row), std::string::npos) << row;
   }
 }
 

@@ -144,7 +144,7 @@ TEST(DeclaredUnits, AUnitWithoutAScaleOrABadScaleIsAnErrorNamingTheKey) {
     prepare_data(rec);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1': expected a number of mm in [1e-06, 1e+06]"),
+    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1': expected a number of mm per unit in [1e-06, 1000000]"),
               std::string::npos) << e.what();
   }
 }
