@@ -190,10 +190,6 @@ void keep_backup(const std::filesystem::path& file, const std::filesystem::path&
   }
 }
 
-}  // namespace
-
-namespace {
-
 // `file` and every path its symbolic links lead to, in order (at most 40 links, as the kernel).
 // Throws InputError for a longer chain (a loop) or a link that cannot be read.
 std::vector<std::filesystem::path> link_chain(const std::filesystem::path& file) {
@@ -208,6 +204,10 @@ std::vector<std::filesystem::path> link_chain(const std::filesystem::path& file)
   }
   throw InputError(file.string() + ": too many levels of symbolic links");
 }
+
+// The file a write to `file` replaces: `file`, or the end of its chain of symbolic links (which
+// may not exist yet: a dangling link is written through to its target, or fails there).
+std::filesystem::path written_path(const std::filesystem::path& file) { return link_chain(file).back(); }
 
 }  // namespace
 
@@ -236,10 +236,6 @@ std::string replaceable_file_problem(const std::filesystem::path& file) {
   const bool linked = fs::is_symlink(fs::symlink_status(file, ec));
   return std::string(linked ? "links to " : "is ") + kind + ": expected a regular file (or a new path) to write";
 }
-
-// The file a write to `file` replaces: `file`, or the end of its chain of symbolic links (which
-// may not exist yet: a dangling link is written through to its target, or fails there).
-std::filesystem::path written_path(const std::filesystem::path& file) { return link_chain(file).back(); }
 
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
   write_files_atomically({{file, contents}});

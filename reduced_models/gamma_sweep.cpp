@@ -64,6 +64,7 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
     for (std::size_t i = begin; i < end; ++i) {
       FitOptions o = options;
       o.threads = 1;
+      o.progress = nullptr;  // the sweep reports each γ done (below), not the stages of its fits
       o.bounds.gamma = {std::min(o.bounds.gamma.lower, sweep.gamma[i]),
                         std::max(o.bounds.gamma.upper, sweep.gamma[i]), sweep.gamma[i], true};
       if (kind == ModelKind::hybrid) o.bounds.gamma_sub = o.bounds.gamma;

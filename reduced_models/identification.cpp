@@ -130,7 +130,7 @@ FitOptions resolve_bounds(FitOptions options, const std::vector<const Experiment
     if (std::isinf(spec->upper)) spec->upper = std::max(spec->lower, 10.0 * longest);
   }
   if (std::isinf(b.L.upper)) b.L.upper = std::max(b.L.lower, 0.5 * shortest);
-  for (const std::string& name : {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz"}) {
+  for (const char* name : {"K", "T", "T2", "lambda", "gamma", "L", "K_sub", "gamma_sub", "Tz"}) {
     ParameterSpec& spec = b[name];
     if (!spec.fixed && spec.lower == spec.upper) {
       spec.fixed = true;
@@ -185,6 +185,7 @@ class FitSession {
     bool converged = searched.converged;
     std::string message = searched.message;
     if (!search_copies_.empty()) {
+      stage(kind, "refining on the whole record");
       Problem whole(kind, data_, options_);
       double cost = 0.0;
       // Integer-order models simulate in O(n): their polish is one full-tolerance run with full
@@ -199,6 +200,7 @@ class FitSession {
     // The polish profiles K out in closed form: a K held fixed keeps the IAE fit.
     const bool least_squares = options_.criterion == Criterion::least_squares && output_linear_in_gain(kind) &&
                                !options_.bounds.K.fixed;
+    if (least_squares) stage(kind, "polishing by least squares");
     FitResult r = least_squares ? polish_least_squares(kind, model, converged, message)
                                 : result(model, converged, message);
     // A model that contains another must not fit worse than it: the inner model's fit, written
@@ -231,6 +233,7 @@ class FitSession {
   // kept when it is better.
   const Searched& search(ModelKind kind) {
     if (const auto it = searched_.find(kind); it != searched_.end()) return it->second;
+    stage(kind, "searching the delay and time constant");
     Searched best;
     Problem problem(kind, search_data_, search_options_);
     const ModelKind linear = linear_counterpart(kind);
@@ -372,6 +375,12 @@ class FitSession {
   }
 
   std::vector<const ExperimentData*> data_;
+  // What a single long fit is doing (the models it nests are fitted first): options.progress,
+  // with no share done, since the stages' costs differ by model and record.
+  void stage(ModelKind kind, const std::string& what) const {
+    if (options_.progress) options_.progress({-1.0, model_name(kind) + ": " + what});
+  }
+
   FitOptions options_;
   FitOptions search_options_;
   std::vector<ExperimentData> search_copies_;
@@ -534,10 +543,13 @@ std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData
   std::vector<FitResult> results(data.size());
   std::mutex progress_mutex;  // the callback is called from one thread at a time
   std::size_t done = 0;
+  // One report per finished fit; a single fit (one recording) reports its stages instead.
+  FitOptions each = options;
+  if (data.size() > 1) each.progress = nullptr;
   parallel_for(data.size(), static_cast<int>(options.threads), [&](std::size_t i) {
     std::exception_ptr error;
     try {
-      results[i] = fit(kind, data[i], options);
+      results[i] = fit(kind, data[i], each);
     } catch (...) {
       error = std::current_exception();  // reported by parallel_for once every fit has run
     }
