@@ -38,6 +38,12 @@ double operating_point(const Recording& rec, const Scenario& scenario) {
   return *meta;
 }
 
+// The recorded y_up_mm drives the head gate: asked for by the replay, or the scenario's own
+// upstream (`kind = "recorded"`).
+bool recorded_upstream(const Scenario& scenario, const ReplayOptions& o) {
+  return o.use_recorded_upstream || scenario.upstream.kind == scenarios::UpstreamKind::recorded;
+}
+
 // The whole recording as a drive: time from 0, the command switched `command_lead_samples` early,
 // and one extra row holding the operating point before the first sample so that the replay
 // settles there.
@@ -160,7 +166,7 @@ Replay prepare_replay(const Recording& rec, const Scenario& scenario, const Repl
   p.operating_point_mm = operating_point(rec, scenario);
   p.initial_upstream_mm = initial_upstream(rec);
   p.drive = sampled_drive(rec, p.operating_point_mm, o.command_lead_samples * period, period);
-  const bool upstream_replayed = o.use_recorded_upstream && rec.has(columns::upstream_level);
+  const bool upstream_replayed = recorded_upstream(scenario, o) && rec.has(columns::upstream_level);
   if (o.reconstruct_clock && (!upstream_replayed || o.clock_with_upstream)) {
     const std::vector<double> switches = command_switch_times(t, u);
     if (!switches.empty()) {
@@ -196,7 +202,7 @@ Channels replay_true(const Scenario& scenario, const Replay& p, const ReplayOpti
   ideal.offset_y_up_mm = ideal.offset_y_dw_mm = ideal.offset_y_dwe_mm = 0.0;
   e.sensors = ideal;
   scenarios::SimulateOptions so;
-  so.drive.use_recorded_upstream = o.use_recorded_upstream && p.drive.has(columns::upstream_level);
+  so.drive.use_recorded_upstream = recorded_upstream(scenario, o) && p.drive.has(columns::upstream_level);
   // The recorded upstream level less its sensor's offsets is the water level that feeds the gate.
   const double up_offset = s.sensors.offset_mm + s.sensors.offset_y_up_mm;
   Recording corrected;

@@ -113,7 +113,7 @@ void add_blindtest_command(CLI::App& app) {
   auto args = std::make_shared<BlindtestArguments>();
   auto* cmd = app.add_subcommand("blindtest", "Conceal effects in simulated experiments and score the diagnosis");
   cmd->add_option("--trials", args->trials, "Number of trials (default 40)")->check(integer_in(1, 100000, "a number of trials"));
-  cmd->add_option("--seed", args->seed, "Random seed (default 1)");
+  cmd->add_option("--seed", args->seed, "Random seed (default 1)")->check(seed_value());
   cmd->add_option("--json", args->json, "Write per-trial results and the summary as JSON");
   cmd->add_option("--scenario", args->scenario, "Scenario (default: the built-in lab canal)");
   cmd->add_option("--threads", args->threads, "Trials in parallel (default 2)")->check(thread_count());

@@ -85,6 +85,9 @@ inline CLI::Validator integer_in(long long low, long long high, const std::strin
       std::to_string(low) + ".." + std::to_string(high));
 }
 
+// A random seed: an integer from 0 to 2⁵³ (every one exact where a recording's metadata states it).
+inline CLI::Validator seed_value() { return integer_in(0, 9007199254740992LL, "a seed"); }
+
 // Worker threads: the same limits for every subcommand.
 inline CLI::Validator thread_count() { return integer_in(1, 64, "a number of threads"); }
 

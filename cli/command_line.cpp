@@ -1,7 +1,7 @@
 // The command line: subcommand registration, parsing and the one-line error contract.
-#include <new>
 #include <exception>
 #include <iostream>
+#include <new>
 #include <string>
 
 #include "cli/command_line.hpp"
@@ -65,6 +65,22 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
 }  // namespace
 
 namespace canalsim::cli {
+namespace {
+
+// An empty value (`--json ""`, `-o ""`) would read as the option not given, or fail after the work
+// naming no file: every option that takes a value refuses it as it is parsed.
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator non_empty(
+      [](std::string& text) -> std::string { return text.empty() ? "expected a value, got an empty string" : ""; },
+      "");
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    for (CLI::Option* option : sub->get_options()) {
+      if (option->get_items_expected_min() > 0) option->check(non_empty);
+    }
+  }
+}
+
+}  // namespace
 
 void add_all_commands(CLI::App& app) {
   app.require_subcommand(1);
@@ -81,6 +97,7 @@ void add_all_commands(CLI::App& app) {
   add_diagnose_command(app);
   add_blindtest_command(app);
   add_linearize_command(app);
+  refuse_empty_values(app);
 }
 
 int run_command_line(CLI::App& app, int argc, char** argv) {

@@ -133,8 +133,10 @@ void add_dambreak_command(CLI::App& app) {
     bool allow_long = false;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--cells", args->cells, "Number of cells on the 20 m channel")->capture_default_str();
-  cmd->add_option("--time", args->time, "Simulated time [s]")->capture_default_str();
+  cmd->add_option("--cells", args->cells, "Number of cells on the 20 m channel")
+      ->capture_default_str()
+      ->check(integer_in(2, 100000000, "a number of cells"));
+  cmd->add_option("--time", args->time, "Simulated time [s]")->capture_default_str()->check(positive_number("a time in s"));
   cmd->add_flag("--dry", args->dry, "Dry bed downstream (Ritter) instead of 0.1 m (Stoker)");
   cmd->add_option("-o,--output", args->output, "CSV file to write")->capture_default_str();
   cmd->add_flag("--allow-long", args->allow_long, "Run past the cost ceilings (1e10 cell updates, 2 GB)");

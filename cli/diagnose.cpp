@@ -107,6 +107,17 @@ int run_model(const DiagnoseArguments& args) {
   const std::vector<Recording> recordings = read_all(args.recordings);
   diagnosis::ModelDiagnoseOptions options;
   options.kind = reduced::require_model_kind(args.model);
+  // --upstream-level stands in for a missing y_up_mm column of a model that uses the level.
+  if (args.upstream_level_mm) {
+    const std::string flag = "diagnose --upstream-level " + format_g(*args.upstream_level_mm);
+    if (!reduced::uses_upstream_level(options.kind)) {
+      throw InputError(flag + ": model " + args.model +
+                       " does not use the upstream level (nliom-f, nlfom-f, nliom-s, nlfom-s and hybrid do)");
+    }
+    if (std::all_of(recordings.begin(), recordings.end(), [](const Recording& r) { return r.has(columns::upstream_level); })) {
+      throw InputError(flag + ": every recording has a y_up_mm column, which is used instead (the flag is for recordings without one)");
+    }
+  }
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
   options.quantum_mm = args.quantum_mm;

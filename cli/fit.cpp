@@ -174,6 +174,36 @@ std::string gain_unit_text(ModelKind kind, const std::vector<ExperimentData>& da
   return "K in " + unit + per_second;
 }
 
+// A gain, time constant or order that ends on a bound was not identified within the bounds: the
+// figures are printed, with a warning that says which (a delay or exponent of 0 is a model, not a
+// limit, and is not warned about).
+void warn_about_bounds(const FitResult& fit, const FitOptions& options, const std::string& stage) {
+  for (const std::string name : {"K", "T", "T2", "Tz", "lambda", "K_sub"}) {
+    const auto names = parameter_names(fit.model.kind);
+    if (std::find(names.begin(), names.end(), name) == names.end()) continue;
+    const ParameterSpec& spec = options.bounds[name];
+    if (spec.fixed || spec.lower == spec.upper) continue;
+    const double v = get_parameter(fit.model.p, name);
+    const auto on = [&](double bound) { return std::isfinite(bound) && std::abs(v - bound) <= 1e-9 * std::max(1.0, std::abs(bound)); };
+    if (!on(spec.lower) && !on(spec.upper)) continue;
+    std::cerr << "canalsim: warning: " << stage << ": " << name << " = " << format_g(v) << " is at its "
+              << (on(spec.lower) ? "lower" : "upper") << " bound: not identified within the bounds "
+              << "(widen them with --bounds, or check the recording)\n";
+  }
+}
+
+// --upstream-level stands in for a y_up_mm column: given where every recording has one, it would
+// be ignored without a word.
+void require_upstream_level_used(const std::optional<double>& level, const std::vector<ExperimentData>& data,
+                                 const std::string& command) {
+  if (!level) return;
+  for (const auto& d : data) {
+    if (d.y_up_is_constant_option) return;
+  }
+  throw InputError(command + " --upstream-level " + format_g(*level) +
+                   ": every recording has a y_up_mm column, which is used instead (the flag is for recordings without one)");
+}
+
 // A model whose error is more than ten times the recording's own variation (Nrmse below
 // -1000 %, eq. 19, or not a number) is not a fit: it diverged (an exponent the bounds or --gamma held where the
 // model is unstable), and printing its parameters would present it as one.
@@ -290,6 +320,7 @@ void run_fit(const FitArguments& args) {
     data.push_back(load_experiment(file, data_options));
     if (uses_upstream_level(kind)) require_upstream_level(data.back(), model_name(kind));
   }
+  require_upstream_level_used(args.upstream_level_mm, data, "fit");
 
   ProgressLine progress("canalsim fit");
   FitOptions options;
@@ -336,6 +367,9 @@ void run_fit(const FitArguments& args) {
     require_finite_figures(fit_json(fits[j], data, {j}), "fit of " + model_name(kind) + " to " + fits[j].sources.front());
   }
   if (nominal) require_model_follows(*nominal, "nominal fit of " + model_name(kind));
+  progress.finish();
+  for (const auto& f : fits) warn_about_bounds(f, options, "fit of " + model_name(kind) + " to " + f.sources.front());
+  if (nominal) warn_about_bounds(*nominal, options, "nominal fit of " + model_name(kind));
   if (nominal) {
     std::vector<std::size_t> all(data.size());
     for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
@@ -464,12 +498,16 @@ void add_fit_command(CLI::App& app) {
     if (cmd->count("--memory-terms") > 0 && args->memory == "full") {
       throw InputError("fit --memory-terms: applies to --memory short (the full memory keeps every term)");
     }
-    if (cmd->count("--upstream-level") > 0) {
-      const ModelKind kind = require_model_kind(args->model);
-      if (!uses_upstream_level(kind)) {
-        throw InputError("fit --upstream-level: model " + model_name(kind) +
-                         " does not use the upstream level (nliom-f, nlfom-f, nliom-s, nlfom-s and hybrid do)");
+    const ModelKind kind = require_model_kind(args->model);
+    for (const char* flag : {"--memory", "--memory-terms"}) {
+      if (cmd->count(flag) > 0 && !is_fractional(kind)) {
+        throw InputError(std::string("fit ") + flag + ": model " + model_name(kind) +
+                         " has no fractional order (the Grünwald–Letnikov memory applies to lfom, nlfom-f, nlfom-s and hybrid)");
       }
+    }
+    if (cmd->count("--upstream-level") > 0 && !uses_upstream_level(kind)) {
+      throw InputError("fit --upstream-level: model " + model_name(kind) +
+                       " does not use the upstream level (nliom-f, nlfom-f, nliom-s, nlfom-s and hybrid do)");
     }
     run_fit(*args);
   });

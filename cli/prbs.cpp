@@ -98,11 +98,17 @@ void add_prbs_command(CLI::App& app) {
       "prbs", "Print the design of a maximal-length PRBS input (period, spectral null, -3 dB band, "
               "lowest frequency) and optionally write the sequence");
   cmd->add_option("--stages", args->stages, "shift-register stages n, 2..20 (N = 2^n - 1 bits)")
+      ->check(integer_in(prbs_min_stages, prbs_max_stages, "a number of stages"))
       ->capture_default_str();
-  cmd->add_option("--clock", args->clock_s, "clock period Tc in seconds, > 0")->capture_default_str();
+  cmd->add_option("--clock", args->clock_s, "clock period Tc in seconds, > 0")
+      ->capture_default_str()
+      ->check(number_in(kMinSamplePeriod, 3600.0, "a clock period in s"));
   cmd->add_option("--amplitude", args->amplitude_mm, "amplitude in mm (+- about the operating point)")
+      ->check(number_in(1e-6, 1000.0, "an amplitude in mm"))
       ->capture_default_str();
-  cmd->add_option("--seed", args->seed, "seed of the initial register")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "seed of the initial register")
+      ->capture_default_str()
+      ->check(seed_value());
   cmd->add_option("-o,--output", args->output, "write one period as CSV t_s,u_mm to this file");
   cmd->callback([args] {
     check_arguments(*args);

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cli/checks.hpp"
+#include "core/files.hpp"
 #include "cli/commands.hpp"
 #include "study/bode.hpp"
 #include "study/render.hpp"
@@ -48,6 +49,12 @@ struct ReproduceArguments {
 // Fails early (before minutes of work) when DIR cannot be created or written.
 void check_output_directory(const fs::path& dir) {
   std::error_code ec;
+  // The files it will hold are replaceable (not in /dev, /proc or /sys; not devices or FIFOs).
+  for (const char* name : {"tables.json", "tables.md", "report.html", "bode.json", "bode.md", "bode.html"}) {
+    if (const std::string problem = replaceable_file_problem(dir / name); !problem.empty()) {
+      throw InputError("--out " + dir.string() + ": " + (dir / name).string() + " " + problem);
+    }
+  }
   if (fs::exists(dir, ec)) {
     if (!fs::is_directory(dir, ec)) throw InputError(dir.string() + ": --out exists and is not a directory");
     if (::access(dir.c_str(), W_OK) != 0) throw InputError(dir.string() + ": --out directory is not writable");

@@ -27,6 +27,13 @@ std::string read_text_file(const std::filesystem::path& file, const std::string&
   if (std::filesystem::is_directory(status)) {
     throw InputError(file.string() + ": is a directory, expected a " + what);
   }
+  // A named FIFO blocks the open until something writes to it, which may be never. (A pipe from
+  // the shell, <(command), is a link in /dev/fd to a pipe that has its writer: it is read.)
+  const auto own = std::filesystem::symlink_status(file, ec);
+  if (std::filesystem::is_fifo(own) || std::filesystem::is_socket(own)) {
+    throw InputError(file.string() + ": is a " + (std::filesystem::is_fifo(own) ? "FIFO" : "socket") + ", expected a " +
+                     what + " file (to read a stream, give <(command) instead)");
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string() + ": cannot open the " + what + " for reading (permission denied?)");
   // Read in chunks up to a ceiling: a device or pipe without end (/dev/zero given as a recording)

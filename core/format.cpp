@@ -13,13 +13,14 @@ std::string format_g(double value, int significant) {
 }
 
 std::string format_fixed(double value, int decimals) {
-  if (!std::isfinite(value)) return value > 0 ? "∞" : (value < 0 ? "-∞" : "nan");
+  if (!std::isfinite(value)) return value > 0 ? "∞" : (value < 0 ? "-∞" : "n/a");
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
   return buffer;
 }
 
 std::string format_estimate(double value, double std) {
+  if (!std::isfinite(value)) return format_fixed(value, 0) + " (± n/a)";  // an unlimited gate speed: ∞
   if (!(std > 0.0) || !std::isfinite(std)) return format_g(value, 4) + " (± n/a)";
   const int decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(std))), 0, 12);
   return format_fixed(value, decimals) + " ± " + format_fixed(std, decimals);

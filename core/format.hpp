@@ -9,12 +9,13 @@ namespace canalsim {
 // an std::ostream prints; recordings use 10 so that a value survives the round trip to 1e-10.
 std::string format_g(double value, int significant = 6);
 
-// Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or nan.
+// Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or n/a (a NaN), never as inf or nan.
 std::string format_fixed(double value, int decimals);
 
 // An estimate with its standard deviation, "0.0123 ± 0.0041": the deviation to two significant
 // digits and the value to the same decimal place (so a small deviation never prints as ± 0.000).
-// A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)".
+// A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)"; an infinite value
+// (a gate speed without limit) is "∞ (± n/a)".
 std::string format_estimate(double value, double std);
 
 // A value echoed in a message: at most the first 60 characters (whole UTF-8 characters) and

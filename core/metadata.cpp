@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
-#include <cstdlib>
+#include <system_error>
 
 #include "core/format.hpp"
 
@@ -16,6 +17,7 @@ using Type = MetadataKey::Type;
 // value outside is a typo or corrupt data, and one that reached a model would overflow its cost.
 constexpr double kMaxLengthMm = 1.0e5;
 constexpr double kMaxVolumeM3 = 1.0e12;
+constexpr double kMaxSeed = 9007199254740992.0;  // 2⁵³: every integer up to it is exact in a double
 
 constexpr std::array kKeys = {
     MetadataKey{"scenario", Type::text, 0, 0, false, "", "the scenario the recording was simulated from"},
@@ -49,7 +51,7 @@ constexpr std::array kKeys = {
     MetadataKey{"stages", Type::integer, 2, 20, false, "", "the PRBS's shift-register stages"},
     MetadataKey{"clock_s", Type::number, 0.0, 3600.0, true, "s", "the PRBS's clock period"},
     MetadataKey{"amplitude_mm", Type::number, -1000.0, 1000.0, false, "mm", "the PRBS's amplitude"},
-    MetadataKey{"seed", Type::integer, 0, 4294967295.0, false, "", "the PRBS's seed"},
+    MetadataKey{"seed", Type::integer, 0, kMaxSeed, false, "", "the PRBS's seed"},
 };
 
 }  // namespace
@@ -68,12 +70,14 @@ std::string expected_text(const MetadataKey& k) {
   return "expected " + what + " in " + metadata_range_text(k);
 }
 
-// The whole text as a finite number ("2x", "nan", "inf" and "" are not).
+// The whole text as a finite decimal number, as the reader takes a cell ("2x", "0x10", "nan",
+// "inf" and "" are not).
 std::optional<double> parse_finite(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size() || !std::isfinite(value)) return std::nullopt;
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+    return std::nullopt;
+  }
   return value;
 }
 
@@ -97,7 +101,11 @@ std::string metadata_value_problem(std::string_view key, const std::string& valu
   const bool in_range = number && (k->above_low ? *number > k->low : *number >= k->low) && *number <= k->high &&
                         (k->type != Type::integer || *number == std::floor(*number));
   if (in_range) return "";
-  return "'" + format_excerpt(value) + "': " + expected_text(*k);
+  std::string problem = "'";
+  problem += format_excerpt(value);
+  problem += "': ";
+  problem += expected_text(*k);
+  return problem;
 }
 
 std::optional<double> metadata_number(const Recording& recording, std::string_view key) {
@@ -129,10 +137,14 @@ void check_metadata(const Recording& recording, bool uniform_time,
       throw InputError(where(i) + ": metadata " + key + ": " + problem);
     }
   }
-  // 2. Keys that must agree: a unit of mm has a scale of 1.
+  // 2. Keys that must agree: a scale names its unit, and a unit of mm has a scale of 1.
   for (const std::string which : {"u", "y"}) {
     const std::string unit_key = which + "_unit", scale_key = which + "_scale_mm_per_unit";
     const std::string unit = recording.meta(unit_key), scale = recording.meta(scale_key);
+    if (!scale.empty() && unit.empty()) {
+      throw InputError(where(line_of(scale_key)) + ": metadata " + scale_key + ": " + scale + " mm per unit of no name: " +
+                       "expected " + unit_key + " too (the unit's name, e.g. # " + unit_key + ": counts)");
+    }
     if (unit == "mm" && !scale.empty() && *parse_finite(scale) != 1.0) {
       throw InputError(where(line_of(scale_key)) + ": metadata " + scale_key + ": " + scale + " contradicts " +
                        unit_key + ": mm: expected 1 (or another " + unit_key + ")");

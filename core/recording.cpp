@@ -249,7 +249,9 @@ std::string format_recording(const Recording& rec) {
       if (rec.names[c] == columns::regime) {
         out += v >= 0.5 ? "submerged" : "free";
       } else {
-        out += format_g(v, 10);
+        // Time with 15 digits: at t = 1e8 s, ten would round a 0.13 s step by up to 4 %, more than
+        // the reader's uniformity tolerance, and the file would not read back.
+        out += format_g(v, rec.names[c] == columns::time ? 15 : 10);
       }
     }
     out += "\n";

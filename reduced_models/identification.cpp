@@ -29,6 +29,18 @@ void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>
                        " (" + std::to_string(parameter_names(kind).size()) + " parameters and the operating point): " +
                        "expected at least " + std::to_string(needed));
     }
+    // The response is what follows the command's first move away from the operating point: a
+    // move in the last samples leaves nothing to fit (K = 0 would "fit" perfectly).
+    std::size_t first_move = 0;
+    while (first_move < d->size() && std::abs(d->u_mm[first_move] - d->u0_mm) <= 1e-9 * std::max(1.0, std::abs(d->u0_mm))) {
+      ++first_move;
+    }
+    if (d->size() - first_move < needed) {
+      throw InputError(d->source + ": the command first leaves its operating point " + format_g(d->u0_mm) + " mm at t = " +
+                       format_g(first_move < d->size() ? d->t_s[first_move] : d->t_s.back()) + " s, " +
+                       std::to_string(d->size() - first_move) + " samples before the end: too few to fit " +
+                       model_name(kind) + " (expected at least " + std::to_string(needed) + ")");
+    }
     if (uses_upstream_level(kind)) require_upstream_level(*d, model_name(kind));
     const auto& L = options.bounds.L;
     if (L.lower >= d->duration()) {

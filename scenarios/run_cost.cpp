@@ -39,6 +39,9 @@ RunCost estimate_run_cost(const Scenario& s, const ExperimentSpec& e, double h) 
     shortest_step = std::min(shortest_step, s.numerics.cfl * dx / celerity);
   }
   cost.time_steps = (e.duration_s + e.settle_s) / shortest_step;
+  // Every run ends a step at each jump of the command: a PRBS clocked far faster than the waves
+  // adds a step a bit.
+  if (e.input.kind == InputKind::prbs) cost.time_steps += e.duration_s / e.input.prbs_clock_s;
   cost.cell_updates = cells * cost.time_steps;
   const double columns = 9.0 + (s.pools.size() > 1 ? static_cast<double>(s.pools.size()) : 0.0);
   cost.memory_bytes = cost.samples * columns * kBytesPerField + cells * kBytesPerCell;

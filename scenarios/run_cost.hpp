@@ -29,7 +29,8 @@ inline constexpr double kMaxSamples = 1.0e9;
 
 // The estimate. Time steps follow the CFL condition dt = cfl dx / (|u| + c) with the celerity
 // c = sqrt(g h) of a pool filled to its wall height (the fastest wave a pool within its banks
-// carries; |u| is of the same order in subcritical canals), so the estimate errs towards more steps.
+// carries; |u| is of the same order in subcritical canals), so the estimate errs towards more steps;
+// a PRBS input adds one step per clock period (each jump ends a step).
 RunCost estimate_run_cost(const Scenario& scenario, const ExperimentSpec& experiment, double sample_period_s);
 
 // One replay of `recording` through `scenario`: a run of the recording's duration sampled at its

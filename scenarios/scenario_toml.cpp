@@ -158,6 +158,19 @@ InputSpec read_input(TomlTable t) {
             : kind == "step"   ? InputKind::step
             : kind == "ramp"   ? InputKind::ramp
                                : InputKind::file;
+  // A key of another kind would be read and then ignored without a word.
+  const struct {
+    const char* key;
+    std::initializer_list<const char*> kinds;
+  } applies[] = {{"stages", {"prbs"}},          {"clock_s", {"prbs"}},         {"seed", {"prbs"}},
+                 {"amplitude_mm", {"prbs", "step", "ramp"}}, {"start_s", {"step", "ramp"}},
+                 {"ramp_duration_s", {"ramp"}}, {"file", {"file"}}};
+  for (const auto& [key, kinds] : applies) {
+    if (!t.has(key) || std::find(kinds.begin(), kinds.end(), kind) != kinds.end()) continue;
+    std::string which;
+    for (const char* k : kinds) which += std::string(which.empty() ? "" : ", ") + "\"" + k + "\"";
+    t.fail(key, "does not apply to kind = \"" + kind + "\" (only to kind = " + which + ")");
+  }
   in.prbs_stages = t.integer("stages", in.prbs_stages, 2, 20);
   in.prbs_clock_s = t.number("clock_s", in.prbs_clock_s, {0.0, 3600.0, true}, "s");
   in.prbs_seed = t.seed("seed", in.prbs_seed);

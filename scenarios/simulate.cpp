@@ -123,6 +123,14 @@ std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const ExperimentSp
       throw InputError(levels->source + ": missing column y_up_mm: upstream.kind = \"recorded\" (" + s.source +
                        ") drives the head gate's upstream level with it");
     }
+    // A level of the supply is a depth above the gate's sill: positive, and within 100 m.
+    const auto& recorded = levels->column(columns::upstream_level);
+    for (std::size_t k = 0; k < recorded.size(); ++k) {
+      if (!(recorded[k] > 0.0 && recorded[k] <= 1.0e5)) {
+        throw InputError(levels->where(k) + ": y_up_mm = " + format_g(recorded[k]) + " mm: expected an upstream level in " +
+                         "(0, 100000] mm to drive upstream.kind = \"recorded\" (" + s.source + ")");
+      }
+    }
     const auto series = SeriesSignal::from_recording(*levels, columns::upstream_level);
     std::vector<double> t = levels->column(columns::time), y(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) y[i] = series.value(t[i]);
@@ -678,7 +686,9 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   rec.source = s.name + "/" + e.name;
   rec.set_meta("scenario", s.name);
   rec.set_meta("experiment", e.name);
-  rec.set_meta("operating_opening_mm", format_g(e.operating_opening_mm));
+  // The opening the canal rested at before t = 0: an input file holds its first command there.
+  const double rest_mm = e.input.kind == InputKind::file && b.command ? b.command->value(-1e-9) / kMm : e.operating_opening_mm;
+  rec.set_meta("operating_opening_mm", format_g(rest_mm));
   rec.set_meta("sampling_period_s", format_g(h));
   rec.set_meta("generator", "canalsim simulate");
   rec.set_meta("initial_state", initial.description);

@@ -150,7 +150,18 @@ std::string TomlTable::string(const std::string& key, const std::string& fallbac
   if (!node->is_string()) {
     throw InputError(where(node) + ": " + dotted(key) + " is " + type_name(*node) + ": expected a string");
   }
-  return *node->value<std::string>();
+  std::string text = *node->value<std::string>();
+  // A control character (a NUL above all) would cut a file name or a message short where the text
+  // is used; a name ("name", a file) is one line. Tabs and line breaks are kept in descriptions.
+  const bool one_line = key == "name" || key == "file";
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte == 0x7f || (byte < 0x20 && (one_line || (c != '\n' && c != '\t' && c != '\r')))) {
+      throw InputError(where(node) + ": " + dotted(key) + " contains the control character " + std::to_string(byte) +
+                       ": expected printable text");
+    }
+  }
+  return text;
 }
 
 std::string TomlTable::choice(const std::string& key, const std::string& fallback,

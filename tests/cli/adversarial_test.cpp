@@ -273,6 +273,89 @@ TEST(Adversarial, ResampleUpdatesTheStatedSamplingPeriod) {
   fs::remove_all(scratch);
 }
 
+// An empty value would read as the option not given (a JSON not written, the default grid, the
+// current directory) or fail after the work naming nothing; a named FIFO as a recording would
+// block for ever; a number the parser cannot convert would say so without the range expected.
+TEST(Adversarial, EmptyValuesFifosAndUnconvertibleNumbersAreOneLineBeforeAnyWork) {
+  const fs::path scratch = scratch_dir("adv_values");
+  std::ofstream(scratch / "op1.csv") << op1_text();
+  ASSERT_EQ(::mkfifo((scratch / "fifo.csv").c_str(), 0600), 0);
+  const struct {
+    std::string command, expected;
+  } cases[] = {
+      {"fit -m liom op1.csv --json ''", "--json: expected a value, got an empty string"},
+      {"resample op1.csv -o '' --period 0.26", "expected a value, got an empty string"},
+      {"simulate lab -e op1 --out-dir ''", "--out-dir: expected a value, got an empty string"},
+      {"linearize lab -e op1 --freq ''", "--freq: expected a value, got an empty string"},
+      {"scenarios --show ''", "--show: expected a value, got an empty string"},
+      {"fit -m liom fifo.csv", "fifo.csv: is a FIFO, expected a recording file"},
+      {"prbs --stages abc", "--stages: expected a number of stages from 2 to 20, got abc"},
+      {"prbs --seed -1", "--seed: expected a seed from 0 to 9007199254740992, got -1"},
+      {"prbs --clock 1e-300", "--clock: expected a clock period in s in [1e-06, 3600], got 1e-300"},
+      {"prbs --amplitude 1e300", "--amplitude: expected an amplitude in mm in [1e-06, 1000], got 1e300"},
+      {"dambreak --cells abc", "--cells: expected a number of cells from 2 to 100000000, got abc"},
+      {"blindtest --seed -1 --trials 1", "--seed: expected a seed from 0 to 9007199254740992, got -1"},
+      {"reproduce -o /dev", "--out /dev: /dev/tables.json is in /dev"},
+  };
+  for (const auto& c : cases) {
+    const RunResult r = run_canalsim(c.command, scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
+  }
+  EXPECT_EQ(entry_count(scratch), 2u);  // op1.csv and the FIFO: nothing written
+  fs::remove_all(scratch);
+}
+
+// Flags and metadata that would change nothing, or change the result without a word, and inputs
+// that leave nothing to fit, are refused; a parameter that ends on a bound is said to.
+TEST(Adversarial, IgnoredFlagsContradictoryUnitsAndUnexcitedRecordingsAreRefused) {
+  const fs::path scratch = scratch_dir("adv_ignored");
+  std::ofstream(scratch / "op1.csv") << op1_text();
+  std::ofstream(scratch / "scale_only.csv") << with_metadata("# u_scale_mm_per_unit: 2");
+  std::ofstream(scratch / "hex.csv") << with_metadata("# operating_opening_mm: 0x10");
+  std::string late = "t_s,u_mm,y_up_mm,y_dwe_mm\n";
+  for (int k = 0; k < 400; ++k) late += std::to_string(0.13 * k) + "," + (k < 399 ? "15" : "20") + ",60," + std::to_string(44 + 0.01 * k) + "\n";
+  std::ofstream(scratch / "late.csv") << late;
+  const struct {
+    std::string command, expected;
+  } cases[] = {
+      {"fit -m nliom-f op1.csv --upstream-level 30", "fit --upstream-level 30: every recording has a y_up_mm column"},
+      {"diagnose --model liom op1.csv --upstream-level 60", "diagnose --upstream-level 60: model liom does not use"},
+      {"fit -m liom op1.csv --memory full", "fit --memory: model liom has no fractional order"},
+      {"fit -m liom scale_only.csv", "metadata u_scale_mm_per_unit: 2 mm per unit of no name: expected u_unit too"},
+      {"fit -m liom hex.csv", "metadata operating_opening_mm: '0x10': expected a number of mm"},
+      {"fit -m liom late.csv", "late.csv: the command first leaves its operating point 15 mm at t = 51.87 s, 1 samples"},
+  };
+  for (const auto& c : cases) {
+    const RunResult r = run_canalsim(c.command, scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
+  }
+  const RunResult bound = run_canalsim("fit -m liom op1.csv --bounds K=0.001:0.01", scratch);
+  EXPECT_EQ(bound.code, 0) << bound.err;
+  EXPECT_NE(bound.err.find("canalsim: warning: fit of liom to op1.csv: K = 0.01 is at its upper bound"), std::string::npos)
+      << bound.err;
+  fs::remove_all(scratch);
+}
+
+// Time stamps of 1e8 s keep their 0.13 s step through resample (written with enough digits), and
+// a diagnosis prints an unlimited gate speed as ∞, not inf.
+TEST(Adversarial, LargeTimesSurviveResampleAndNoInfIsPrinted) {
+  const fs::path scratch = scratch_dir("adv_large_times");
+  std::ofstream(scratch / "late_clock.csv") << with_rows([](std::vector<std::string>& f, std::size_t) {
+    f[0] = std::to_string(1e8 + std::stod(f[0]));
+  });
+  const RunResult r = run_canalsim("resample late_clock.csv -o r.csv --period 0.26", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const RunResult fit = run_canalsim("fit -m liom r.csv", scratch);
+  EXPECT_EQ(fit.code, 0) << fit.err;
+  std::ofstream(scratch / "op1.csv") << op1_text();
+  const RunResult d = run_canalsim("diagnose --scenario lab op1.csv --candidates gate_rate_limit sensor_offset", scratch);
+  EXPECT_EQ(d.code, 0) << d.err;
+  EXPECT_FALSE(prints_non_finite(d.out)) << d.out;
+  fs::remove_all(scratch);
+}
+
 // A canal of one pool behind the lab's head gate whose experiment replays an input file: the
 // scenario the next two tests run, with the upstream `kind` line given.
 void write_file_driven_canal(const fs::path& file, const std::string& upstream, const std::string& input) {
@@ -358,6 +441,58 @@ TEST(Adversarial, ARecordedUpstreamIsDrivenByTheInputFilesLevels) {
   const RunResult missing = run_canalsim("simulate missing.toml -o m.csv", scratch);
   EXPECT_TRUE(is_one_error_line(missing)) << missing.err;
   EXPECT_NE(missing.err.find("command_only.csv: missing column y_up_mm"), std::string::npos) << missing.err;
+  // A level that cannot feed a gate is refused where it is read, naming the row.
+  std::string negative = input;
+  negative.replace(negative.find(",60.000000\n"), 11, ",-50\n");
+  std::ofstream(scratch / "negative.csv") << negative;
+  write_file_driven_canal(scratch / "negative.toml", "kind = \"recorded\"", "negative.csv");
+  const RunResult below = run_canalsim("simulate negative.toml -o n.csv", scratch);
+  EXPECT_TRUE(is_one_error_line(below)) << below.err;
+  EXPECT_NE(below.err.find("negative.csv:2: y_up_mm = -50 mm: expected an upstream level in (0, 100000] mm"), std::string::npos)
+      << below.err;
+  // The scenario's own recording replays through it: the replay drives the gate with its y_up_mm
+  // (and starts from the opening the recording rested at, its first command).
+  EXPECT_NE(out.find("# operating_opening_mm: 20\n"), std::string::npos);
+  const RunResult diagnosis = run_canalsim("diagnose --scenario recorded.toml out.csv --candidates sensor_offset", scratch);
+  EXPECT_EQ(diagnosis.code, 0) << diagnosis.err;
+  fs::remove_all(scratch);
+}
+
+// Scenario inputs whose keys belong to another kind, a PRBS clocked a billion times a second, and
+// a name with a NUL in it are refused when the scenario is read, before anything runs.
+TEST(Adversarial, ScenarioInputsThatCannotApplyAreRefusedBeforeTheRun) {
+  const fs::path scratch = scratch_dir("adv_scenario_inputs");
+  std::ofstream(scratch / "u.csv") << "t_s,u_mm\n0,20\n10,10\n20,20\n30,10\n";
+  const std::string level = "kind = \"level\"\nlevel_m = 0.06";
+  const struct {
+    std::string name, input, expected;
+  } cases[] = {
+      {"file_stages", "kind = \"file\"\nfile = \"u.csv\"\nstages = 5", "stages: does not apply to kind = \"file\" (only to kind = \"prbs\")"},
+      {"prbs_file", "kind = \"prbs\"\nfile = \"u.csv\"", "file: does not apply to kind = \"prbs\""},
+      {"constant_amplitude", "kind = \"constant\"\namplitude_mm = 5", "amplitude_mm: does not apply to kind = \"constant\""},
+      {"fast_clock", "kind = \"prbs\"\nclock_s = 1e-9", "cell updates"},
+  };
+  for (const auto& c : cases) {
+    std::ostringstream toml;
+    {
+      write_file_driven_canal(scratch / (c.name + ".toml"), level, "u.csv");
+      std::string text = read_text(scratch / (c.name + ".toml"));
+      text = text.substr(0, text.find("kind = \"file\"\nfile")) + c.input + "\n";
+      std::ofstream(scratch / (c.name + ".toml")) << text;
+    }
+    const RunResult r = run_canalsim("simulate " + c.name + ".toml -o out.csv", scratch);
+    EXPECT_TRUE(is_one_error_line(r)) << c.name << " -> " << r.code << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.name << ": " << r.err;
+  }
+  write_file_driven_canal(scratch / "nul.toml", level, "u.csv");
+  std::string text = read_text(scratch / "nul.toml");
+  text.replace(text.find("name = \"rec\""), 12, "name = \"e\\u0000x\"");
+  std::ofstream(scratch / "nul.toml") << text;
+  const RunResult nul = run_canalsim("simulate nul.toml --out-dir od", scratch);
+  EXPECT_TRUE(is_one_error_line(nul)) << nul.err;
+  EXPECT_NE(nul.err.find("experiments[0].name contains the control character 0"), std::string::npos) << nul.err;
+  EXPECT_FALSE(fs::exists(scratch / "out.csv"));
+  EXPECT_FALSE(fs::exists(scratch / "od"));
   fs::remove_all(scratch);
 }
 

@@ -26,7 +26,8 @@ TEST(FormatFixed, FixedDecimalsAndNamedNonFiniteValues) {
   EXPECT_EQ(format_fixed(2.0 / 3.0, 3), "0.667");
   EXPECT_EQ(format_fixed(std::numeric_limits<double>::infinity(), 2), "∞");
   EXPECT_EQ(format_fixed(-std::numeric_limits<double>::infinity(), 2), "-∞");
-  EXPECT_EQ(format_fixed(std::nan(""), 2), "nan");
+  EXPECT_EQ(format_fixed(std::nan(""), 2), "n/a");
+  EXPECT_EQ(format_estimate(std::numeric_limits<double>::infinity(), 0.0), "∞ (± n/a)");
 }
 
 TEST(FormatEstimate, TwoSignificantDigitsOfTheDeviationNeverZero) {
