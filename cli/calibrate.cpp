@@ -138,9 +138,9 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
 }
 
 // A calibration replays each recording about 100 times on the scenario's grid (bench/README.md:
-// 400–500 simulations for four recordings), and each refinement about as often on twice the cells
-// (four times the work a replay: half the cell size, half the time step). Refused past the ceiling
-// of one run (scenarios/run_cost.hpp), before any work, unless --allow-long.
+// 400–500 simulations for four recordings), and each refinement about half as often again on twice
+// the cells, at four times the work a replay (half the cell size, half the time step). Refused
+// past the ceiling of one run (scenarios/run_cost.hpp), before any work, unless --allow-long.
 void check_calibration_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
                             const std::vector<Recording>& validation, const CalibrateArguments& args) {
   if (args.allow_long) return;
