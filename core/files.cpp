@@ -291,7 +291,8 @@ void write_files_atomically(const std::vector<FileContents>& requested) {
     for (std::size_t i = 0; i < files.size(); ++i) {
       const fs::path& file = files[i].first;
       std::error_code ec;
-      if (fs::exists(fs::symlink_status(file, ec))) {
+      const bool existed = fs::exists(fs::symlink_status(file, ec));
+      if (existed) {
         // Until the backup is complete an interruption removes it; from then on it is restored.
         const fs::path backup = beside(file, "bak");
         InterruptGuard half_made(backup);
@@ -303,7 +304,17 @@ void write_files_atomically(const std::vector<FileContents>& requested) {
         committed.push_back(std::make_unique<InterruptGuard>(file));
       }
       fs::rename(beside(file, "tmp"), file, ec);
-      if (ec) throw InputError(file.string() + ": cannot replace the file: " + ec.message());
+      if (ec) {
+        // This file was not replaced (an immutable file, say): it needs no restoring, and its
+        // backup, if it has one, goes; the files before it are restored below.
+        committed.back()->release();
+        committed.pop_back();
+        if (existed) {
+          ::unlink(backups.back().c_str());
+          backups.pop_back();
+        }
+        throw InputError(file.string() + ": cannot replace the file: " + ec.message());
+      }
       temporaries[i]->release();
     }
   } catch (...) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -157,6 +158,25 @@ TEST(Files, ALinkIsWrittenThroughAndTheFileKeepsItsMode) {
   EXPECT_EQ(text_of(dir / "a.txt"), "old a");
   EXPECT_TRUE(fs::is_symlink(dir / "dangling.html"));
   EXPECT_EQ(entries(dir), 4u);  // target.json, out.json, dangling.html, a.txt
+  fs::remove_all(dir);
+}
+
+// A file that cannot be renamed over (immutable: even root cannot replace it) fails the set after
+// the earlier files were renamed into place: they get their contents back, and no backup is left
+// of the file that was never replaced.
+TEST(Files, AFileThatCannotBeReplacedLeavesNoBackup) {
+  const fs::path dir = scratch("immutable");
+  put(dir / "a.txt", "old a");
+  put(dir / "b.txt", "old b");
+  if (std::system(("chattr +i '" + (dir / "b.txt").string() + "' 2>/dev/null").c_str()) != 0) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "the file system has no immutable flag here";
+  }
+  EXPECT_THROW(canalsim::write_files_atomically({{dir / "a.txt", "new a"}, {dir / "b.txt", "new b"}}), InputError);
+  EXPECT_EQ(std::system(("chattr -i '" + (dir / "b.txt").string() + "'").c_str()), 0);
+  EXPECT_EQ(text_of(dir / "a.txt"), "old a");
+  EXPECT_EQ(text_of(dir / "b.txt"), "old b");
+  EXPECT_EQ(entries(dir), 2u);  // no *.tmp.*, no *.bak.*
   fs::remove_all(dir);
 }
 
