@@ -58,7 +58,8 @@ constexpr std::array kKeys = {
 
 std::string metadata_range_text(const MetadataKey& k) {
   if (k.type == Type::text) return "text";
-  return std::string(k.above_low ? "(" : "[") + format_g(k.low, 10) + ", " + format_g(k.high, 10) + "]";
+  const int digits = k.type == Type::integer ? 17 : 10;  // an integer's bound in full (2⁵³ for a seed)
+  return std::string(k.above_low ? "(" : "[") + format_g(k.low, digits) + ", " + format_g(k.high, digits) + "]";
 }
 
 namespace {
