@@ -92,13 +92,14 @@ bool prints_non_finite(const std::string& text) {
 void check_contract(const Run& run, const std::string& command) {
   if (run.code != 0 && run.code != 1) breach(command + ": exit status " + std::to_string(run.code));
   if (run.code == 1) {
-    std::size_t errors = 0;
-    for (std::size_t at = run.err.find("canalsim: error: "); at != std::string::npos;
-         at = run.err.find("canalsim: error: ", at + 1)) {
-      ++errors;
-    }
-    const std::size_t last = run.err.rfind("canalsim: error: ");
-    if (errors != 1 || run.err.find('\n', last) != run.err.size() - 1) {
+    // Progress and warning lines may come first; the error is the one line that starts with the
+    // prefix (the text it quotes may hold the prefix too), and it is the last.
+    std::vector<std::string> lines;
+    std::istringstream in(run.err);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    const auto errors = std::count_if(lines.begin(), lines.end(),
+                                      [](const std::string& l) { return l.rfind("canalsim: error: ", 0) == 0; });
+    if (errors != 1 || lines.empty() || lines.back().rfind("canalsim: error: ", 0) != 0 || run.err.back() != '\n') {
       breach(command + ": the error is not one line: " + run.err.substr(0, 300));
     }
     return;
