@@ -23,7 +23,7 @@ double at_fractional(const std::vector<double>& y, double index) {
 
 bool is_level(const std::string& channel) {
   return channel == columns::upstream_level || channel == columns::level_below_gate ||
-         channel == columns::level_downstream_end;
+         channel == columns::level_downstream_end || channel.rfind("y_check", 0) == 0;
 }
 
 SensorModel sensor_model_of(const scenarios::SensorSpec& sensors) {
@@ -56,19 +56,28 @@ double expected_reading(double y, double resolution, double spread) {
 
 Channels observe(const Channels& truth, const SensorModel& m, double period_s) {
   Channels out;
-  const double shift = m.delay_s / period_s;
+  const double clock_shift = m.clock_delay_s / period_s;
+  static const ChannelFault kHealthy;
   for (const auto& [name, y] : truth) {
+    std::vector<double> v(y.size());
     if (!is_level(name)) {
-      out[name] = y;
+      for (std::size_t k = 0; k < y.size(); ++k) v[k] = clock_shift == 0.0 ? y[k] : at_fractional(y, static_cast<double>(k) - clock_shift);
+      out[name] = std::move(v);
       continue;
     }
     const auto own = m.channel_offset_mm.find(name);
-    const double offset = m.offset_mm + (own == m.channel_offset_mm.end() ? 0.0 : own->second);
-    std::vector<double> v(y.size());
+    const auto found = m.channel_fault.find(name);
+    const ChannelFault& fault = found == m.channel_fault.end() ? kHealthy : found->second;
+    const double offset = m.offset_mm + (own == m.channel_offset_mm.end() ? 0.0 : own->second) + fault.offset_mm;
+    const double shift = clock_shift + (m.delay_s + fault.delay_s) / period_s;
+    const double resolution = fault.resolution_mm >= 0.0 ? fault.resolution_mm : m.resolution_mm;
+    const double drift_per_sample = fault.drift_mm_per_min * period_s / 60.0;
     for (std::size_t k = 0; k < y.size(); ++k) {
-      const double level = at_fractional(y, static_cast<double>(k) - shift) + offset;
-      v[k] = m.reading_spread_mm > 0.0 ? expected_reading(level, m.resolution_mm, m.reading_spread_mm)
-                                       : laws::quantise(level, m.resolution_mm);
+      const double level = fault.gain * at_fractional(y, static_cast<double>(k) - shift) + offset +
+                           drift_per_sample * static_cast<double>(k) - fault.lattice_offset_mm;
+      v[k] = fault.lattice_offset_mm +
+             (m.reading_spread_mm > 0.0 ? expected_reading(level, resolution, m.reading_spread_mm)
+                                        : laws::quantise(level, resolution));
     }
     out[name] = std::move(v);
   }

@@ -77,15 +77,31 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
   return out;
 }
 
+namespace {
+
+// "name = value" lines of a table of names, non-finite values left out.
+std::string named_values(const std::map<std::string, double>& values) {
+  std::string out;
+  for (const auto& [name, v] : values) {
+    if (!std::isfinite(v)) continue;
+    const std::string key = name.find('.') == std::string::npos ? name : "\"" + name + "\"";
+    out += key + " = " + format_g(v, 6) + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations,
-                                   double baseline_rms_mm) {
+                                   double baseline_rms_mm, const std::map<std::string, double>& deviations_alone,
+                                   const std::map<std::string, double>& baseline_rms_by_channel) {
   std::string out;
   std::map<std::string, int> counts;
   bool skipping = false;
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) {
     const std::string h = header_of(line, counts);
-    if (!h.empty()) skipping = h == "calibration" || h == "calibration.std";
+    if (!h.empty()) skipping = h.rfind("calibration", 0) == 0 && (h.size() == 11 || h[11] == '.');
     if (!skipping) out += line + "\n";
   }
   while (out.size() >= 2 && out.compare(out.size() - 2, 2, "\n\n") == 0) out.pop_back();
@@ -93,12 +109,17 @@ std::string with_calibration_table(const std::string& text, const std::map<std::
     out += "\n[calibration]  # canalsim calibrate: what the calibrated model still misses on its baseline\n"
            "baseline_rms_mm = " + format_g(baseline_rms_mm, 6) + "\n";
   }
+  if (!baseline_rms_by_channel.empty()) {
+    out += "\n[calibration.baseline_rms]  # the same residual RMS for each level channel [mm]\n" +
+           named_values(baseline_rms_by_channel);
+  }
   out += "\n[calibration.std]  # one statistical standard deviation of each calibrated parameter (canalsim calibrate);\n"
-         "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n";
-  for (const auto& [name, sd] : deviations) {
-    if (!std::isfinite(sd)) continue;
-    const std::string key = name.find('.') == std::string::npos ? name : "\"" + name + "\"";
-    out += key + " = " + format_g(sd, 6) + "\n";
+         "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n" +
+         named_values(deviations);
+  if (!deviations_alone.empty()) {
+    out += "\n[calibration.std_alone]  # the same with the other parameters held at their estimates: what\n"
+           "                         # canalsim diagnose, fitting one effect at a time, takes as left open\n" +
+           named_values(deviations_alone);
   }
   return out;
 }

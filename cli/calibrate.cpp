@@ -118,7 +118,9 @@ std::string calibrated_toml(const std::string& text, const calibration::Calibrat
   for (const auto& p : c.parameters) deviations[p.name] = diagnosis::left_open(p);
   std::string out = "# Calibrated by canalsim calibrate from " + args.scenario + " on" + recordings + "\n" +
                     calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations,
-                                                        diagnosis::baseline_rms_of(c, columns::level_downstream_end));
+                                                        diagnosis::baseline_rms_of(c, columns::level_downstream_end),
+                                                        diagnosis::calibrated_std_alone_of(c),
+                                                        diagnosis::baseline_rms_by_channel(c));
   const scenarios::Scenario back = scenarios::parse_scenario(out, args.out);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
+
+#include "calibration/observe.hpp"
 #include "calibration/parameters.hpp"
 #include "core/declared_units.hpp"
 #include "core/errors.hpp"
@@ -75,17 +78,55 @@ std::map<std::string, double> calibrated_std_of(const calibration::Calibration& 
 }
 
 std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& s) {
-  if (s.calibrated_std.empty()) return {};
+  if (s.calibrated_std.empty() && s.calibrated_std_alone.empty()) return {};
   const std::vector<calibration::Parameter> catalog = calibration::parameter_catalog(s);
-  for (const auto& [name, sd] : s.calibrated_std) {
-    const std::string& key = name;  // clang 14 cannot capture a structured binding
-    const bool known = std::any_of(catalog.begin(), catalog.end(), [&](const auto& p) { return p.name == key; });
-    if (!known) {
-      throw InputError(s.source + ": calibration.std." + name + ": not a calibration parameter of " + s.name +
-                       " (expected one of " + calibration::parameter_names(catalog) + ")");
+  for (const auto& [table, deviations] : {std::pair{"std", &s.calibrated_std}, std::pair{"std_alone", &s.calibrated_std_alone}}) {
+    for (const auto& [name, sd] : *deviations) {
+      const std::string& key = name;  // clang 14 cannot capture a structured binding
+      const bool known = std::any_of(catalog.begin(), catalog.end(), [&](const auto& p) { return p.name == key; });
+      if (!known) {
+        throw InputError(s.source + ": calibration." + table + "." + name + ": not a calibration parameter of " + s.name +
+                         " (expected one of " + calibration::parameter_names(catalog) + ")");
+      }
     }
   }
-  return s.calibrated_std;
+  return s.calibrated_std_alone.empty() ? s.calibrated_std : s.calibrated_std_alone;
+}
+
+std::map<std::string, double> calibrated_std_alone_of(const calibration::Calibration& c) {
+  std::vector<std::size_t> determined;
+  for (std::size_t i = 0; i < c.parameters.size(); ++i) {
+    if (std::isfinite(left_open(c.parameters[i]))) determined.push_back(i);
+  }
+  const auto n = static_cast<Eigen::Index>(determined.size());
+  if (c.correlation.size() != c.parameters.size() || n == 0) return calibrated_std_of(c);
+  Eigen::MatrixXd R(n, n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) {
+      R(a, b) = c.correlation[determined[static_cast<std::size_t>(a)]][determined[static_cast<std::size_t>(b)]];
+    }
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(R);
+  if (llt.info() != Eigen::Success || !R.allFinite()) return calibrated_std_of(c);
+  const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(n, n));
+  std::map<std::string, double> out;
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const auto& p = c.parameters[determined[static_cast<std::size_t>(a)]];
+    out[p.name] = left_open(p) / std::sqrt(std::max(inverse(a, a), 1.0));
+  }
+  return out;
+}
+
+std::map<std::string, double> baseline_rms_by_channel(const calibration::Calibration& c) {
+  std::map<std::string, std::pair<double, int>> sums;
+  for (const auto& f : c.fits) {
+    if (f.validation || !calibration::is_level(f.channel)) continue;
+    sums[f.channel].first += f.rms_after * f.rms_after;
+    ++sums[f.channel].second;
+  }
+  std::map<std::string, double> out;
+  for (const auto& [channel, s] : sums) out[channel] = std::sqrt(s.first / s.second);
+  return out;
 }
 
 double baseline_rms_of(const calibration::Calibration& c, const std::string& primary) {
@@ -215,8 +256,9 @@ BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, co
     return out;
   }
   DiagnoseOptions d = o.diagnosis;
-  d.calibrated_std = calibrated_std_of(out.calibration);
+  d.calibrated_std = calibrated_std_alone_of(out.calibration);
   d.baseline_rms_mm = baseline_rms_of(out.calibration, d.primary);
+  d.baseline_rms_by_channel = baseline_rms_by_channel(out.calibration);
   d.progress = nullptr;
   if (o.progress) {
     d.progress = [&o](const ProgressReport& r) {

@@ -72,12 +72,22 @@ double left_open(const calibration::ParameterEstimate& estimate);
 // for every parameter the data determined (finite).
 std::map<std::string, double> calibrated_std_of(const calibration::Calibration& calibration);
 
+// The same with the other parameters held at their estimates: σ_i / sqrt((R⁻¹)_ii), R the
+// correlation matrix. A diagnosis fits one effect with the calibrated parameters fixed, so this,
+// not the marginal deviation a correlated neighbour inflates (an offset traded against the
+// downstream opening), is the calibration's own tolerance for it. The marginal deviations when R
+// is not positive definite.
+std::map<std::string, double> calibrated_std_alone_of(const calibration::Calibration& calibration);
+
 // What the calibration left on its own baseline, for DiagnoseOptions::baseline_rms_mm: the RMS of
 // the primary channel's residual after calibration over the baseline recordings [mm].
 double baseline_rms_of(const calibration::Calibration& calibration, const std::string& primary);
+// The same for every level channel it fitted (DiagnoseOptions::baseline_rms_by_channel).
+std::map<std::string, double> baseline_rms_by_channel(const calibration::Calibration& calibration);
 
-// The calibrated standard deviations a scenario file carries ([calibration.std], written by
-// `canalsim calibrate`), each name checked against the scenario's calibration parameters.
+// The calibrated standard deviations a scenario file carries, written by `canalsim calibrate`:
+// [calibration.std_alone] when it has one, else [calibration.std]; each name checked against the
+// scenario's calibration parameters.
 // Throws InputError naming the file and the unknown name.
 std::map<std::string, double> calibrated_std_of(const scenarios::Scenario& scenario);
 

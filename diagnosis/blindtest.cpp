@@ -21,15 +21,14 @@ namespace {
 double uniform(std::mt19937_64& rng, double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
 bool coin(std::mt19937_64& rng) { return std::bernoulli_distribution(0.5)(rng); }
 
-const char* short_name(const std::string& name) {
-  static const std::pair<const char*, const char*> names[] = {
-      {"none", "none"}, {"gate_rate_limit", "rate"}, {"sensor_quantization", "quant"}, {"sensor_delay", "delay"},
-      {"sensor_offset", "offset"}, {"gate_leakage", "leak"}, {"discharge_coefficient", "Cd"}, {"friction", "fric"},
-      {"lateral_outflow", "lateral"}, {"downstream_gate", "dgate"}, {"unexplained", "unexpl"}};
-  for (const auto& [a, b] : names) {
-    if (name == a) return b;
-  }
-  return "other";
+// A class of the confusion matrix: a catalog row (an effect without its channel), none,
+// unexplained or failed.
+std::string class_of(const std::string& name) { return name.substr(0, name.find('[')); }
+
+std::string short_name(const std::string& name) {
+  if (name == "unexplained") return "unexpl";
+  if (const EffectKind* k = kind_named(class_of(name))) return k->label;
+  return name.substr(0, 7);
 }
 
 std::vector<std::string> effect_names(const BlindtestOptions& o) {
@@ -49,7 +48,7 @@ Status BlindtestOptions::validate() const {
   check.require(duration_s == 0.0 || duration_s >= 20.0, "duration_s", duration_s, "0 or >= 20");
   check.require(noise_std_mm >= 0.0, "noise_std_mm", noise_std_mm, ">= 0");
   for (const auto& e : effects) {
-    check.require(effect_from_name(e).has_value(), "effects",
+    check.require(effect_from_name(e).has_value() || kind_named(e) != nullptr, "effects",
                   "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
   check.nested("diagnose", diagnose.validate());
@@ -79,38 +78,44 @@ Status RealisticTruth::validate() const {
   return check.status();
 }
 
-ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng) {
-  ConcealedEffect t{effect, 0.0};
-  if (effect == "gate_rate_limit") t.value = uniform(rng, 2.0, 20.0);
-  else if (effect == "sensor_quantization") t.value = uniform(rng, 0.2, 1.0);
-  else if (effect == "sensor_delay") t.value = uniform(rng, 0.3, 2.0);
-  else if (effect == "sensor_offset") t.value = (coin(rng) ? 1.0 : -1.0) * uniform(rng, 0.5, 3.0);
-  else if (effect == "gate_leakage") t.value = uniform(rng, 0.5, 3.0);
-  else if (effect == "discharge_coefficient") t.value = coin(rng) ? uniform(rng, 0.8, 0.92) : uniform(rng, 1.08, 1.2);
-  else if (effect == "friction") t.value = coin(rng) ? 0.5 : uniform(rng, 2.0, 4.0);
-  else if (effect == "lateral_outflow") t.value = uniform(rng, 0.03, 0.15);
-  else if (effect == "downstream_gate") t.value = (coin(rng) ? 1.0 : -1.0) * uniform(rng, 0.5, 2.0);
-  return t;
+ConcealedEffect draw_effect(const std::string& name, std::mt19937_64& rng, const std::vector<std::string>& level_channels) {
+  if (name == "none") return {"none", 0.0};
+  Effect effect;
+  if (const auto concrete = effect_from_name(name)) {
+    effect = *concrete;
+  } else {
+    effect.kind = kind_named(name);
+    if (!effect.kind) throw std::invalid_argument("blindtest: unknown effect '" + name + "'");
+    if (effect.kind->scope == Scope::each_level_channel) {
+      if (level_channels.empty()) throw std::invalid_argument("blindtest: " + name + " needs a level channel");
+      effect.channel = level_channels[std::uniform_int_distribution<std::size_t>(0, level_channels.size() - 1)(rng)];
+    }
+  }
+  const BlindDraw& d = effect.kind->draw;
+  const double magnitude = uniform(rng, d.low, d.high);
+  const double sign = d.either_sign && coin(rng) ? -1.0 : 1.0;
+  return {effect.name(), to_parameter(effect, effect.kind->theta_none + sign * magnitude)};
 }
 
-void conceal(const ConcealedEffect& truth, scenarios::Scenario& s, scenarios::ExperimentSpec& e, double inflow_m3s) {
+void conceal(const ConcealedEffect& truth, scenarios::Scenario& s, double inflow_m3s) {
   if (truth.effect == "none") return;
   const Effect effect = *effect_from_name(truth.effect);
-  if (!info(effect).sensor_only) {
-    apply_effect(effect, truth.value, s, inflow_m3s);
-    return;
-  }
-  scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
-  if (effect == Effect::sensor_quantization) sensors.resolution_mm = truth.value;
-  if (effect == Effect::sensor_delay) sensors.delay_s += truth.value;
-  if (effect == Effect::sensor_offset) sensors.offset_mm += truth.value;
-  e.sensors = sensors;
+  if (effect.kind->acts == Acts::hydraulics) apply_effect(effect, truth.value, s, inflow_m3s);
 }
 
 double parameter_error(const ConcealedEffect& truth, double estimate) {
   if (truth.effect == "none") return std::numeric_limits<double>::quiet_NaN();
-  const double reference = truth.effect == "discharge_coefficient" ? truth.value - 1.0 : truth.value;
+  const auto effect = effect_from_name(truth.effect);
+  const double none = effect ? no_effect_parameter(*effect) : 0.0;
+  const double reference = std::isfinite(none) ? truth.value - none : truth.value;
   return std::abs(estimate - truth.value) / std::max(std::abs(reference), 1e-12);
+}
+
+bool names_effect(const std::string& verdict, const std::string& concealed, bool gate_position_recorded) {
+  if (verdict == concealed) return true;
+  const auto effect = effect_from_name(concealed);
+  const char* twin = effect ? effect->kind->twin_without_gate_position : nullptr;
+  return !gate_position_recorded && twin && verdict == twin;
 }
 
 BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
@@ -138,6 +143,11 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   if (o.include_none) classes.push_back("none");
   for (const auto& e : effect_names(o)) classes.push_back(e);
   std::mt19937_64 rng(o.seed);
+  // Instrument faults go on one level channel of those the trial's recordings carry (a reduced
+  // model reads y_dwe_mm alone).
+  const std::vector<std::string> levels =
+      o.model ? std::vector<std::string>{columns::level_downstream_end}
+              : std::vector<std::string>{columns::upstream_level, columns::level_below_gate, columns::level_downstream_end};
   std::vector<Trial> trials;
   while (trials.size() < static_cast<std::size_t>(o.trials)) {
     std::vector<std::string> block = classes;
@@ -145,7 +155,7 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     for (const auto& c : block) {
       if (trials.size() < static_cast<std::size_t>(o.trials)) {
         Trial t;
-        t.truth = draw_effect(c, rng);
+        t.truth = draw_effect(c, rng, levels);
         trials.push_back(std::move(t));
       }
     }
@@ -159,8 +169,8 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     std::size_t b = pick(effects.size() - 1);
     if (b >= a) ++b;
     Trial t;
-    t.truth = draw_effect(effects[a], rng);
-    t.second = draw_effect(effects[b], rng);
+    t.truth = draw_effect(effects[a], rng, levels);
+    t.second = draw_effect(effects[b], rng, levels);
     trials.push_back(std::move(t));
   }
   for (std::size_t i = 0; i < trials.size(); ++i) trials[i].index = static_cast<int>(i);
@@ -192,13 +202,18 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   });
 
   // Summary.
-  result.classes = classes;
+  for (const auto& c : classes) {
+    if (std::find(result.classes.begin(), result.classes.end(), class_of(c)) == result.classes.end()) {
+      result.classes.push_back(class_of(c));
+    }
+  }
+  const std::size_t rows = result.classes.size();
   result.classes.push_back("unexplained");
   const auto index_of = [&](const std::string& name) {
     const auto it = std::find(result.classes.begin(), result.classes.end(), name);
     return it == result.classes.end() ? result.classes.size() - 1 : static_cast<std::size_t>(it - result.classes.begin());
   };
-  result.confusion.assign(classes.size(), std::vector<int>(result.classes.size(), 0));
+  result.confusion.assign(rows, std::vector<int>(result.classes.size(), 0));
   std::vector<double> errors, gains;
   double total_seconds = 0.0;
   for (const auto& t : result.trials) {
@@ -208,8 +223,12 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
       result.two_effect_both += t.both_named;
       continue;
     }
-    result.confusion[index_of(t.truth.effect)][index_of(t.verdict)]++;
+    result.confusion[index_of(class_of(t.truth.effect))][index_of(class_of(t.verdict))]++;
     result.correct += t.correct;
+    if (t.truth.effect.find('[') != std::string::npos) {
+      ++result.channel_trials;
+      result.channel_right += t.channel_right;
+    }
     if (t.truth.effect == "none") {
       ++result.clean_trials;
       result.false_alarms += t.verdict != "none";
@@ -263,12 +282,12 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
   std::snprintf(buf, sizeof buf, "%-8s", "");
   s << buf;
   for (const auto& c : r.classes) {
-    std::snprintf(buf, sizeof buf, "%8s", short_name(c));
+    std::snprintf(buf, sizeof buf, "%8s", short_name(c).c_str());
     s << buf;
   }
   s << '\n';
   for (std::size_t i = 0; i < r.confusion.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "%-8s", short_name(r.classes[i]));
+    std::snprintf(buf, sizeof buf, "%-8s", short_name(r.classes[i]).c_str());
     s << buf;
     for (int v : r.confusion[i]) {
       std::snprintf(buf, sizeof buf, "%8s", v ? std::to_string(v).c_str() : ".");
@@ -276,9 +295,11 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
     }
     s << '\n';
   }
-  s << "\n(rate = gate_rate_limit, quant = sensor_quantization, delay = sensor_delay, offset = sensor_offset,\n"
-       " leak = gate_leakage, Cd = discharge_coefficient, fric = friction, lateral = lateral_outflow,\n"
-       " dgate = downstream_gate, unexpl = unexplained)\n\n";
+  std::string legend;
+  for (const auto& c : r.classes) {
+    if (const EffectKind* k = kind_named(c)) legend += (legend.empty() ? "" : ", ") + std::string(k->label) + " = " + k->name;
+  }
+  s << "\n(" << legend << (legend.empty() ? "" : ", ") << "unexpl = unexplained)\n\n";
   // A rate over no clean trials is undefined, not 0%.
   char rate[64];
   std::snprintf(rate, sizeof rate, "%d/%d = %.1f%%", r.false_alarms, r.clean_trials, 100.0 * r.false_alarm_rate);
@@ -294,6 +315,11 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
                 100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.median_heldout_gain, r.min_heldout_gain,
                 r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;
+  if (r.channel_trials > 0) {
+    std::snprintf(buf, sizeof buf, "faulty channel named    %d/%d = %.1f%% of the one-channel instrument faults\n",
+                  r.channel_right, r.channel_trials, 100.0 * r.channel_right / r.channel_trials);
+    s << buf;
+  }
   if (r.two_effect_trials > 0) {
     std::snprintf(buf, sizeof buf, "two effects at once     both named in %d/%d = %.1f%%\n", r.two_effect_both,
                   r.two_effect_trials, 100.0 * r.two_effect_both / r.two_effect_trials);
@@ -314,7 +340,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
       named_values.push_back(n.value);
     }
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
-                      {"verdict", t.verdict}, {"correct", t.correct}, {"estimate", num(t.estimate)},
+                      {"verdict", t.verdict}, {"correct", t.correct}, {"channel_right", t.channel_right}, {"estimate", num(t.estimate)},
                       {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
                       {"seconds", t.seconds}, {"message", t.message}, {"named", named}, {"named_values", named_values}});
     if (t.second) {
@@ -330,7 +356,8 @@ nlohmann::json to_json(const BlindtestResult& r) {
               {"median_parameter_error", r.median_parameter_error}, {"max_parameter_error", r.max_parameter_error},
               {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain}, {"median_heldout_gain", r.median_heldout_gain},
               {"min_heldout_gain", r.min_heldout_gain}, {"two_effect_trials", r.two_effect_trials},
-              {"two_effect_both_named", r.two_effect_both}, {"seconds", r.seconds}, {"trials", trials}};
+              {"two_effect_both_named", r.two_effect_both}, {"channel_trials", r.channel_trials},
+              {"channel_right", r.channel_right}, {"seconds", r.seconds}, {"trials", trials}};
 }
 
 }  // namespace canalsim::diagnosis

@@ -1,15 +1,17 @@
-// The blind benchmark of issue 5: per trial, one concealed effect (or none) with a random
-// magnitude is injected into the scenario, the chosen experiments are simulated with it (sensor
-// noise and quantisation as in the laboratory), the diagnosis runs without being told, and the
-// verdict and estimated parameter are compared with the truth.
+// The blind benchmark: per trial, one concealed effect (or none) with a random magnitude is
+// injected, the chosen experiments are simulated with it, the diagnosis runs without being told,
+// and the verdict and estimated parameter are compared with the truth.
 //
-// Magnitudes (issue 5): gate_rate_limit 2–20 mm/s; sensor_quantization 0.2–1 mm; sensor_delay
-// 0.3–2 s; sensor_offset ±0.5–3 mm; gate_leakage 0.5–3 mm; discharge_coefficient ×0.8–0.92 or
-// ×1.08–1.2; friction ×0.5 or ×2–4; lateral_outflow 3–15% of the inflow; downstream_gate
-// ±0.5–2 mm. Classes are drawn in shuffled blocks of all ten, so every class appears about
-// equally often.
+// Where a concealed effect acts decides how it is concealed. The canal's own physics is edited
+// in the simulated scenario. An instrument fault is made by the logger (as_logged): the
+// experiment is simulated with ideal sensors, then each channel is written as its instrument
+// would — the fault (a delay by cubic interpolation, not the diagnosis' linear one; an offset, a
+// drift, a gain; a lattice at a random offset), the sensor noise, the logger's resolution. An
+// instrument fault acts on one channel, drawn among the level channels, or on the command.
+// Magnitudes are the catalog rows' draws (catalog.cpp); classes are drawn in shuffled blocks of
+// every row (and none), so every class appears about equally often.
 //
-// The realistic blind test (issue 13, `blindtest --realistic`) does not let the diagnosis' own
+// The realistic blind test (`blindtest --realistic`) does not let the diagnosis' own
 // model be the truth: each trial's canal is simulated differently (RealisticTruth::numerics: four
 // times the cells, the other limiter, another Courant number) with its uncertain physics drawn
 // within tolerances (Cd ±5 %, Manning n ±25 %, downstream opening and tail level ±1 mm, level
@@ -35,6 +37,7 @@
 #include "diagnosis/model_diagnosis.hpp"
 #include "diagnosis/baseline.hpp"
 #include "scenarios/scenario.hpp"
+#include "scenarios/simulate.hpp"
 #include "scenarios/variation.hpp"
 
 namespace canalsim::diagnosis {
@@ -94,6 +97,7 @@ struct Trial {
   bool both_named = false;          // two-effect trials: both concealed effects are in `named`
   std::string truth_drawn;          // realistic: the perturbed physics of this trial's truth
   double estimate = 0.0;            // the diagnosis' parameter for the true effect's name
+  bool channel_right = false;       // an instrument fault: the verdict acts on its channel
   double parameter_error = 0.0;     // relative (see docs/diagnosis.md); NaN without an effect
   double heldout_gain = 0.0;        // held-out Nrmse after − before of the verdict [points]
   bool correct = false;
@@ -113,22 +117,46 @@ struct BlindtestResult {
   double median_parameter_error = 0.0, max_parameter_error = 0.0;
   int gain_positive = 0;                      // correct attributions whose held-out Nrmse improved
   int two_effect_trials = 0, two_effect_both = 0;   // realistic: trials with two effects, both named
+  // One-effect trials with an instrument fault on one channel, and those whose verdict names an
+  // effect on that channel.
+  int channel_trials = 0, channel_right = 0;
   double mean_heldout_gain = 0.0, median_heldout_gain = 0.0, min_heldout_gain = 0.0;
   double seconds = 0.0, mean_trial_seconds = 0.0;
 };
 
-// A random magnitude for `effect` in the issue's range.
-ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng);
+// A random magnitude for `effect` (a catalog row's name, or a concrete effect) from its row's
+// draw; a per-channel row without a channel is put on one of `level_channels`, drawn.
+ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng,
+                            const std::vector<std::string>& level_channels = {"y_up_mm", "y_dw_mm", "y_dwe_mm"});
 
-// The scenario with the effect injected; `inflow_m3s` is the reference of lateral_outflow.
-// Sensor effects go into the scenario's (and the experiment's) sensor settings, so the
-// simulator's own sensors make them.
-void conceal(const ConcealedEffect& truth, scenarios::Scenario& scenario, scenarios::ExperimentSpec& experiment,
-             double inflow_m3s);
+// The scenario with a concealed hydraulic effect injected (`inflow_m3s`: the reference of
+// lateral_outflow); other effects leave it unchanged (as_logged makes them).
+void conceal(const ConcealedEffect& truth, scenarios::Scenario& scenario, double inflow_m3s);
 
-// Relative error of an estimate: |est − true| / |true − no effect| for the discharge coefficient
-// (its departure from 1), |est − true| / |true| otherwise.
+// What a logger writes of an experiment simulated with ideal sensors, with the concealed
+// instrument and command faults (header): each level channel faulted, with Gaussian noise of
+// `noise_std_mm`, and read on the lattice of `resolution_mm` (a faulted channel on its own).
+struct Logger {
+  double noise_std_mm = 0.0;
+  double resolution_mm = 0.0;
+  std::uint64_t seed = 1;
+};
+Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& concealed, const Logger& logger);
+
+// One experiment of `scenario` with the concealed effects, as logged: simulated with ideal level
+// sensors (the scenario's own delay and offsets kept) and the hydraulic effects, then written by
+// a Logger with the experiment's sensor noise, resolution and seed.
+Recording simulate_concealed(const scenarios::Scenario& scenario, scenarios::ExperimentSpec experiment,
+                             const std::vector<ConcealedEffect>& concealed, double inflow_m3s,
+                             const scenarios::SimulateOptions& options = {});
+
+// Relative error of an estimate: |est − true| / |true − no effect| (|est − true| / |true| when
+// "no effect" is infinite: the ideal actuator's speed).
 double parameter_error(const ConcealedEffect& truth, double estimate);
+
+// Whether a verdict names the concealed effect: the same effect, or its twin (catalog.hpp) when
+// the recordings hold no gate position to tell them apart.
+bool names_effect(const std::string& verdict, const std::string& concealed, bool gate_position_recorded);
 
 // Runs the benchmark. Throws InputError on invalid options or unknown experiments.
 BlindtestResult run_blindtest(const scenarios::Scenario& scenario, const BlindtestOptions& options);

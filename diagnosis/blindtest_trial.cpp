@@ -45,20 +45,18 @@ std::vector<Recording> record(const TrialContext& c, const Scenario& truth, cons
                               const RecordingPlan& plan) {
   std::vector<Recording> out;
   for (std::size_t k = 0; k < c.experiments.size(); ++k) {
-    Scenario s = truth;
     ExperimentSpec e = c.experiments[k];
     e.input.prbs_seed += plan.prbs_seed_offset;
-    scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
+    scenarios::SensorSpec sensors = e.sensors.value_or(truth.sensors);
     sensors.noise_std_mm = plan.noise_std_mm;
     sensors.seed = plan.sensor_seed + k;
     e.sensors = sensors;
-    for (const ConcealedEffect& effect : concealed) conceal(effect, s, e, c.inflow_m3s[k]);
     // The truth's own start: where its Newton steady state fails (minmod on the fine grid at the
     // free-flow points) it settles by time marching, which is as true a start; not the user's
     // concern, so not a warning.
     scenarios::SimulateOptions so;
     so.warning = [](const std::string&) {};
-    Recording r = scenarios::simulate(s, e, so);
+    Recording r = simulate_concealed(truth, e, concealed, c.inflow_m3s[k], so);
     r.source = plan.label + "/" + e.name;
     out.push_back(plan.levels_only ? levels_only(r) : std::move(r));
   }
@@ -113,10 +111,18 @@ void run_trial(const TrialContext& c, Trial& trial) {
   trial.verdict = d.verdict;
   trial.named.clear();
   for (const auto& e : d.explanation) trial.named.push_back({e.name, e.parameter.value});
-  trial.correct = trial.verdict == trial.truth.effect;
+  // Realistic recordings hold no gate position: a twin of the concealed effect is as right.
+  const bool gate_position = !c.options.realistic;
+  trial.correct = names_effect(trial.verdict, trial.truth.effect, gate_position);
+  const auto channel_of = [](const std::string& name) {
+    const auto open = name.find('[');
+    return open == std::string::npos ? std::string() : name.substr(open);
+  };
+  trial.channel_right = !channel_of(trial.truth.effect).empty() && channel_of(trial.verdict) == channel_of(trial.truth.effect);
   if (trial.second) {
     const auto named = [&](const std::string& e) {
-      return std::any_of(trial.named.begin(), trial.named.end(), [&](const EffectValue& n) { return n.effect == e; });
+      return std::any_of(trial.named.begin(), trial.named.end(),
+                         [&](const EffectValue& n) { return names_effect(n.effect, e, gate_position); });
     };
     trial.both_named = named(trial.truth.effect) && named(trial.second->effect);
   }

@@ -29,33 +29,38 @@ double manning_relative_std(const scenarios::Scenario& s, const std::map<std::st
   return out;
 }
 
+// The offsets a calibration fits: offset_mm (every level sensor) and offset_<channel> (one);
+// a row on every channel overlaps the shared one only.
+double level_offset_std(const Effect& effect, const std::map<std::string, double>& stds) {
+  const double shared = std_of(stds, "offset_mm");
+  if (effect.channel.empty()) return shared;
+  return std::hypot(shared, std_of(stds, "offset_" + effect.channel));
+}
+
 }  // namespace
 
-double calibration_uncertainty(Effect effect, const scenarios::Scenario& s, const std::map<std::string, double>& stds,
-                               double operating_opening_mm) {
+double calibration_uncertainty(const Effect& effect, const scenarios::Scenario& s,
+                               const std::map<std::string, double>& stds, double operating_opening_mm) {
   if (stds.empty()) return 0.0;
-  switch (effect) {
-    case Effect::discharge_coefficient:
-    case Effect::lateral_outflow: return discharge_relative_std(s, stds);
-    case Effect::gate_leakage: return discharge_relative_std(s, stds) * std::max(operating_opening_mm, 0.0);
-    case Effect::friction: return manning_relative_std(s, stds);
-    case Effect::downstream_gate: return std_of(stds, "downstream_opening_mm");
-    case Effect::sensor_offset: return std::hypot(std_of(stds, "offset_mm"), std_of(stds, "offset_y_dwe_mm"));
-    case Effect::sensor_delay: return std_of(stds, "sensor_delay_s");
-    case Effect::gate_rate_limit:
-    case Effect::sensor_quantization: return 0.0;
+  switch (effect.kind->overlap) {
+    case Overlap::discharge: return discharge_relative_std(s, stds);
+    case Overlap::discharge_times_opening: return discharge_relative_std(s, stds) * std::max(operating_opening_mm, 0.0);
+    case Overlap::manning: return manning_relative_std(s, stds);
+    case Overlap::downstream_opening: return std_of(stds, "downstream_opening_mm");
+    case Overlap::level_offset: return level_offset_std(effect, stds);
+    case Overlap::clock: return std_of(stds, "sensor_delay_s");
+    case Overlap::none: return 0.0;
   }
   return 0.0;
 }
 
-bool calibration_spanned_by(Effect added, Effect refitted) {
-  return refitted == Effect::discharge_coefficient && added == Effect::gate_leakage;
+bool calibration_spanned_by(const Effect& added, const Effect& refitted) {
+  return added.kind->spanned_by && refitted.kind->name == std::string(added.kind->spanned_by);
 }
 
-double departure(Effect effect, double parameter) {
-  if (effect == Effect::friction) return std::abs(std::log(parameter));
-  if (effect == Effect::gate_rate_limit) return 0.0;
-  return std::abs(parameter - no_effect_parameter(effect));
+double departure(const Effect& effect, double parameter) {
+  if (effect.kind->coordinate == Coordinate::inverse) return 0.0;
+  return std::abs(to_theta(effect, parameter) - effect.kind->theta_none);
 }
 
 }  // namespace canalsim::diagnosis

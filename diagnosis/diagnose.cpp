@@ -10,6 +10,7 @@
 #include "calibration/calibrate.hpp"
 #include "calibration/replay.hpp"
 #include "core/declared_units.hpp"
+#include "core/format.hpp"
 #include "core/parallel.hpp"
 #include "diagnosis/baseline.hpp"
 #include "diagnosis/calibrated.hpp"
@@ -44,6 +45,30 @@ namespace scenario_engine {
 
 using calibration::observe;
 
+namespace {
+
+// Whether an effect's held-out fit improves (EffectResult::heldout_improves): the primary
+// channel's held-out mean squared residual falls, or another level channel's falls by 1 % while
+// the primary's rises by no more than 10 % and the square of a sensor step (0.05 mm), which is
+// what a refit's noise moves. The first is the rule for physics that moves the levels downstream,
+// the second for the fault of a sensor elsewhere, which leaves the primary channel as it was.
+void judge_by_channel(const Costs& without, const Costs& with, const std::string& primary, EffectResult& out) {
+  const auto mse = [](const Costs& c, const std::string& channel) {
+    const auto it = c.mse_heldout.find(channel);
+    return it == c.mse_heldout.end() ? 0.0 : it->second;
+  };
+  constexpr double kStep = 0.05;
+  const double before = mse(without, primary), after = mse(with, primary);
+  if (after > 1.1 * before + kStep * kStep) out.worsened = primary;
+  bool elsewhere = false;
+  for (const auto& [channel, b] : without.mse_heldout) {
+    if (channel != primary && calibration::is_level(channel) && mse(with, channel) < 0.99 * b) elsewhere = true;
+  }
+  out.heldout_improves = after < before || (elsewhere && out.worsened.empty());
+}
+
+}  // namespace
+
 void Engine::prepare() {
   sensors_ = sensor_model_of(base_.sensors);
   period_ = base_.sensors.period_s;
@@ -52,35 +77,52 @@ void Engine::prepare() {
   if (!recs_.empty() && !recs_.front().data.count(o_.primary)) {
     throw InputError(recs_.front().name + ": missing the primary channel " + o_.primary);
   }
+  for (const auto& c : o_.channels) {
+    const bool everywhere = std::all_of(recs_.begin(), recs_.end(), [&](const Prepared& p) { return p.data.count(c) > 0; });
+    if (calibration::is_level(c) && everywhere) level_channels_.push_back(c);
+  }
+  carry_command_and_reading_effects();
   calibration::ChannelWeights w = calibration::channel_weights(recs_, o_.channels);
   scale_ = std::move(w.scale);
   weight_ = std::move(w.weight);
   for (const auto& p : recs_) fit_samples_ += p.data.size() * p.n_fit;
 }
 
+// The command effects an explanation carries edit the replays' drives; its reading effects the
+// sensor model (a lattice on the phase the recorded levels sit at).
+void Engine::carry_command_and_reading_effects() {
+  for (const auto& [effect, value] : carried_) {
+    if (effect.kind->acts == Acts::command) {
+      for (auto& p : recs_) apply_effect(effect, value, p);
+    } else if (effect.kind->acts == Acts::readings) {
+      apply_effect(effect, value, sensors_);
+      if (effect.kind->search == Search::lattice) {
+        auto& fault = sensors_.channel_fault[effect.channel];
+        fault.resolution_mm = std::max(value, sensors_.resolution_mm);
+        fault.lattice_offset_mm = lattice_phase(effect.channel, fault.resolution_mm);
+      }
+    }
+  }
+}
+
+// The scenario that replays recording i: the base with the carried hydraulic effects, a share of
+// the inflow referred to the inflow of the engine that found it.
 Scenario Engine::scenario_for(std::size_t i) const {
   Scenario s = base_;
-  if (carried_lateral_ != 0.0) apply_effect(Effect::lateral_outflow, carried_lateral_, s, carried_inflow_m3s_.at(i));
+  for (const auto& [effect, value] : carried_) {
+    if (effect.kind->acts == Acts::hydraulics) apply_effect(effect, value, s, carried_inflow_m3s_.at(i));
+  }
   return s;
 }
 
-// The engine of the same recordings whose nominal model carries `effects`: hydraulic and sensor
-// effects edit the scenario (catalog.hpp apply_effect); a lateral outflow keeps this engine's
-// inflow as its reference, so that its fraction means the same in every engine.
+// The engine of the same recordings whose nominal model carries `effects` (and this engine's):
+// every effect keeps this engine's inflow as its reference, so that a share of it means the same
+// in every engine.
 std::unique_ptr<Engine> Engine::with_effects(const std::vector<std::pair<std::string, double>>& effects) const {
   auto engine = std::make_unique<Engine>(base_, recordings_, o_);
-  engine->carried_lateral_ = carried_lateral_;
-  engine->carried_inflow_m3s_ = carried_lateral_ != 0.0 ? carried_inflow_m3s_ : inflow_m3s_;
-  for (const auto& [name, value] : effects) {
-    const Effect effect = *effect_from_name(name);
-    if (effect == Effect::lateral_outflow) {
-      engine->carried_lateral_ += value;
-    } else if (effect == Effect::sensor_quantization) {
-      engine->base_.sensors.resolution_mm = std::max(value, base_.sensors.resolution_mm);
-    } else {
-      apply_effect(effect, value, engine->base_, 0.0);
-    }
-  }
+  engine->carried_ = carried_;
+  engine->carried_inflow_m3s_ = carried_.empty() ? inflow_m3s_ : carried_inflow_m3s_;
+  for (const auto& [name, value] : effects) engine->carried_.emplace_back(*effect_from_name(name), value);
   return engine;
 }
 
@@ -211,18 +253,18 @@ double Engine::reading_spread(double r) const {
   return std::sqrt(std::max(mse - r * r / 12.0, 0.01 * r * r));
 }
 
-// What the sensors read with `effects` in the model: sensor effects re-observe the simulation of
-// the hydraulic ones (the nominal one when there are none).
-std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Readings readings) {
+// The sensor model with the reading effects among `effects`: a lattice on the phase the recorded
+// levels sit at, read as its expectation given the model's spread.
+SensorModel Engine::sensors_with(const std::vector<EffectAt>& effects, Readings readings) const {
   SensorModel m = sensors_;
-  std::vector<EffectAt> hydraulic;
   for (const auto& [effect, theta] : effects) {
+    if (effect.kind->acts != Acts::readings) continue;
     const double parameter = to_parameter(effect, theta);
-    if (!info(effect).sensor_only) {
-      hydraulic.push_back({effect, theta});
-    } else if (effect == Effect::sensor_quantization) {
-      m.resolution_mm = std::max(parameter, sensors_.resolution_mm);
-      m.reading_spread_mm = reading_spread(m.resolution_mm);
+    if (effect.kind->search == Search::lattice) {
+      auto& fault = m.channel_fault[effect.channel];
+      fault.resolution_mm = std::max(parameter, sensors_.resolution_mm);
+      fault.lattice_offset_mm = lattice_phase(effect.channel, fault.resolution_mm);
+      m.reading_spread_mm = reading_spread(fault.resolution_mm);
     } else {
       apply_effect(effect, parameter, m);
     }
@@ -230,7 +272,18 @@ std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Read
   if (readings == Readings::expected && m.resolution_mm > 0.0 && m.reading_spread_mm == 0.0) {
     m.reading_spread_mm = reading_spread(m.resolution_mm);
   }
-  const std::vector<Channels>& truth = hydraulic.empty() ? truth_ : simulated(hydraulic);
+  return m;
+}
+
+// What the sensors read with `effects` in the model: reading effects re-observe the simulation of
+// the hydraulic and command ones (the nominal one when there are none).
+std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Readings readings) {
+  std::vector<EffectAt> simulated_effects;
+  for (const auto& e : effects) {
+    if (e.effect.kind->acts != Acts::readings) simulated_effects.push_back(e);
+  }
+  const SensorModel m = sensors_with(effects, readings);
+  const std::vector<Channels>& truth = simulated_effects.empty() ? truth_ : simulated(simulated_effects);
   std::vector<Channels> out(recs_.size());
   for (std::size_t i = 0; i < recs_.size(); ++i) out[i] = observe(truth[i], m, period_);
   return out;
@@ -240,11 +293,8 @@ std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Read
 // hydraulics again (Levenberg–Marquardt's accepted point, then its Jacobian; a sensor effect's
 // column). A bounded cache: it is emptied when full.
 const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydraulic) {
-  std::vector<double> key;
-  for (const auto& [effect, theta] : hydraulic) {
-    key.push_back(static_cast<double>(effect));
-    key.push_back(theta);
-  }
+  std::vector<std::pair<std::string, double>> key;
+  for (const auto& [effect, theta] : hydraulic) key.emplace_back(effect.name(), theta);
   if (const auto it = simulations_.find(key); it != simulations_.end()) return it->second;
   constexpr std::size_t kKept = 24;
   if (simulations_.size() >= kKept) simulations_.clear();
@@ -252,8 +302,15 @@ const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydr
   std::vector<Channels> truth(recs_.size());
   parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
     Scenario s = scenario_for(i);
-    for (const auto& [effect, theta] : hydraulic) apply_effect(effect, to_parameter(effect, theta), s, inflow_m3s_[i]);
-    truth[i] = simulate_true(s, recs_[i]);
+    Prepared replay = recs_[i];
+    for (const auto& [effect, theta] : hydraulic) {
+      if (effect.kind->acts == Acts::command) {
+        apply_effect(effect, to_parameter(effect, theta), replay);
+      } else {
+        apply_effect(effect, to_parameter(effect, theta), s, inflow_m3s_[i]);
+      }
+    }
+    truth[i] = simulate_true(s, replay);
   });
   return simulations_.emplace(std::move(key), std::move(truth)).first->second;
 }
@@ -276,29 +333,16 @@ EffectResult Engine::explain(const std::string& candidate) {
     return out;
   }
   int sims = 0;
-  switch (effect) {
-    case Effect::sensor_offset: return judge(effect, fit_sensor_offset(), sims);
-    case Effect::sensor_delay: return judge(effect, fit_sensor_delay(), sims);
-    case Effect::sensor_quantization: return judge(effect, fit_sensor_quantization(), sims);
-    case Effect::gate_rate_limit: {
-      Point best = fit_gate_rate_limit(sims);
-      return judge(effect, std::move(best), sims);
-    }
-    default: {
-      Point start = nominal_point_;
-      start.theta = info(effect).theta_none;
-      Point best = fit_by_secant(effect, start, sims);
-      return judge(effect, std::move(best), sims);
-    }
-  }
+  Point best = fit(effect, sims);
+  return judge(effect, std::move(best), sims);
 }
 
 // Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
 // point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
 // parameter's unit.
-double Engine::parameter_std(Effect effect, const Point& best) const {
+double Engine::parameter_std(const Effect& effect, const Point& best) const {
   double jj = 0.0;
-  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? info(effect).theta_none : nominal_point_.theta);
+  const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? effect.kind->theta_none : nominal_point_.theta);
   if (std::abs(d_theta) > 0.0) {
     for (std::size_t k = 0; k < best.r.size(); ++k) {
       const double j = (best.r[k] - nominal_point_.r[k]) / d_theta;
@@ -314,7 +358,7 @@ double Engine::parameter_std(Effect effect, const Point& best) const {
 // Whether the effect moves the calibrated physics by more than calibrated_z standard deviations of
 // what the baseline calibration left open (diagnosis/calibrated.hpp); true for an uncalibrated
 // scenario.
-bool Engine::beyond_calibration(Effect effect, double parameter) const {
+bool Engine::beyond_calibration(const Effect& effect, double parameter) const {
   double opening = 0.0;
   for (const auto& p : recs_) opening += p.operating_point_mm / static_cast<double>(recs_.size());
   const double open = o_.calibrated_z * calibration_uncertainty(effect, base_, o_.calibrated_std, opening);
@@ -323,12 +367,11 @@ bool Engine::beyond_calibration(Effect effect, double parameter) const {
 
 // An effect's result before it is fitted: its names, and the figures of `model` (the nominal
 // one, or an explanation without the effect) before and after.
-EffectResult Engine::unchanged(Effect effect, const Costs& model) const {
-  const EffectInfo& e = info(effect);
+EffectResult Engine::unchanged(const Effect& effect, const Costs& model) const {
   EffectResult out;
-  out.name = e.name;
-  out.parameter.name = e.parameter;
-  out.parameter.unit = e.unit;
+  out.name = effect.name();
+  out.parameter.name = effect.kind->parameter;
+  out.parameter.unit = effect.kind->unit;
   out.cost_before = out.cost_after = balanced(model, false);
   out.heldout_cost_before = out.heldout_cost_after = balanced(model, true);
   out.nrmse_before = out.nrmse_after = model.nrmse_fit;
@@ -340,7 +383,7 @@ EffectResult Engine::unchanged(Effect effect, const Costs& model) const {
 // and after, held-out score, BIC, material and significance (pipeline.hpp's rule, with a held-out
 // score of at least `min_score`). `within_calibration_counts`: the parameter must also exceed what
 // the calibration leaves open (false where a jointly refitted effect spans that, calibrated.hpp).
-EffectResult Engine::judged_against(Effect effect, const Point& with, const Costs& without, double min_score,
+EffectResult Engine::judged_against(const Effect& effect, const Point& with, const Costs& without, double min_score,
                                     bool within_calibration_counts) const {
   EffectResult out = unchanged(effect, without);
   const Costs after = costs(with.prediction);
@@ -354,29 +397,35 @@ EffectResult Engine::judged_against(Effect effect, const Point& with, const Cost
   out.parameter.value = to_parameter(effect, with.theta);
   out.material = is_material(effect, out.parameter.value) &&
                  (!within_calibration_counts || beyond_calibration(effect, out.parameter.value));
-  // "Show the fit improve": the primary channel's held-out Nrmse must rise too, so that a pooled
-  // cost cannot name an effect that fits the upstream channels while the levels downstream —
-  // what the verdict is about — get worse (seen on calibrated realistic truths).
-  out.significant = is_significant(out, {min_score, o_.min_bic_gain, true});
+  // "Show the fit improve": the held-out fit must improve on some channel and get materially worse
+  // on none, so that a pooled cost cannot name an effect that fits the upstream channels while the
+  // levels downstream get worse (seen on calibrated realistic truths), nor miss one that fits a
+  // faulty upstream sensor and leaves the rest as it was.
+  judge_by_channel(without, after, o_.primary, out);
+  const SignificanceRule rule{min_score, o_.min_bic_gain, true};
+  out.significant = is_significant(out, rule);
+  out.set_aside = set_aside_reason(out, rule);
   return out;
 }
 
 // An effect at its fitted point, judged against the nominal model, with its uncertainty.
-EffectResult Engine::judge(Effect effect, Point best, int sims) {
-  const EffectInfo& e = info(effect);
+EffectResult Engine::judge(const Effect& effect, Point best, int sims) {
   EffectResult out = judged_against(effect, best, nominal_costs_, o_.min_score, true);
   out.simulations = sims;
   out.parameter.std = parameter_std(effect, best);
-  if (effect == Effect::sensor_quantization) {
+  if (effect.kind->search == Search::lattice) {
     // A quantised reading is best predicted in the mean-square sense by the unquantised level, so
     // the squared-error cost cannot reward this effect. Its evidence is the lattice: a step at
     // least twice the modelled resolution, and the lattice coherence of the held-out levels at
     // the step fitted on the first part as the score.
     const double value = std::max(out.parameter.value, sensors_.resolution_mm);
     out.parameter.value = value;
-    out.material = value >= std::max(e.material, 2.0 * sensors_.resolution_mm);
-    out.score = out.material ? heldout_coherence(value) : 0.0;
+    out.material = value >= std::max(effect.kind->material, 2.0 * sensors_.resolution_mm);
+    out.score = out.material ? heldout_coherence(value, channels_of(effect)) : 0.0;
     out.significant = out.material && out.score >= 0.9;
+    out.set_aside = out.significant ? ""
+                    : !out.material ? "the recorded lattice is the modelled resolution"
+                                    : "lattice coherence " + format_g(out.score, 2) + " < 0.9";
   }
   best_[out.name] = std::move(best);
   return out;
@@ -412,6 +461,7 @@ std::vector<RecordingResiduals> Engine::residuals_with(const std::string& effect
       std::vector<double> e(p.n);
       for (std::size_t k = 0; k < p.n; ++k) e[k] = y[k] - it->second[k];
       r.residuals[c] = std::move(e);
+      if (calibration::is_level(c)) r.recorded[c] = y;
     }
     r.nrmse_percent = reduced::nrmse_percent(model[i].at(o_.primary), p.data.at(o_.primary));
     out.push_back(std::move(r));
@@ -453,6 +503,9 @@ Status DiagnoseOptions::validate() const {
   check.require(warmup_s >= 0.0, "warmup_s", warmup_s, ">= 0");
   check.require(calibrated_z > 0.0, "calibrated_z", calibrated_z, "> 0");
   check.require(baseline_rms_mm >= 0.0, "baseline_rms_mm", baseline_rms_mm, ">= 0");
+  for (const auto& [channel, rms] : baseline_rms_by_channel) {
+    check.require(rms >= 0.0 && std::isfinite(rms), "baseline_rms_by_channel." + channel, rms, ">= 0");
+  }
   check.require(baseline_factor > 0.0, "baseline_factor", baseline_factor, "> 0");
   for (const auto& [name, sd] : calibrated_std) {
     check.require(sd >= 0.0, "calibrated_std." + name, sd, ">= 0 (a standard deviation)");
@@ -460,11 +513,57 @@ Status DiagnoseOptions::validate() const {
   check.nested("tests", tests.validate());
   check.nested("locate", locate.validate());
   for (const auto& c : candidates) {
-    check.require(effect_from_name(c).has_value(), "candidates",
+    check.require(effect_from_name(c).has_value() || kind_named(c) != nullptr, "candidates",
                   "unknown effect '" + c + "' (expected one of " + catalog_names() + ")");
   }
   return check.status();
 }
+
+namespace {
+
+// The compared level channels every recording carries.
+std::vector<std::string> level_channels_of(const std::vector<Recording>& recordings, const std::vector<std::string>& channels) {
+  std::vector<std::string> out;
+  for (const auto& c : channels) {
+    if (calibration::is_level(c) &&
+        std::all_of(recordings.begin(), recordings.end(), [&](const Recording& r) { return r.has(c); })) {
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+// The candidates to explain with: the catalog on these recordings' level channels, or the ones
+// asked for (a per-channel kind without a channel stands for it on every level channel). A
+// channel the recordings lack is an InputError.
+std::vector<std::string> candidate_names(const std::vector<std::string>& asked, const std::vector<std::string>& levels,
+                                         const std::vector<Recording>& recordings) {
+  const std::vector<Effect> all = effects_for(levels);
+  std::vector<std::string> out;
+  if (asked.empty()) {
+    for (const Effect& e : all) out.push_back(e.name());
+    return out;
+  }
+  std::string compared;
+  for (const auto& c : levels) compared += (compared.empty() ? "" : ", ") + c;
+  for (const auto& name : asked) {
+    if (const auto effect = effect_from_name(name)) {
+      if (!effect->channel.empty() && std::find(levels.begin(), levels.end(), effect->channel) == levels.end()) {
+        throw InputError("candidates: " + name + " names channel " + effect->channel + ", which " +
+                         (recordings.empty() ? std::string("no recording") : recordings.front().source) +
+                         " does not carry (level channels compared: " + compared + ")");
+      }
+      out.push_back(name);
+      continue;
+    }
+    for (const Effect& e : all) {
+      if (e.kind->name == name) out.push_back(e.name());
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings_as_recorded,
                    const DiagnoseOptions& given) {
@@ -472,6 +571,7 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
   DiagnoseOptions options = given;
   if (options.calibrated_std.empty()) options.calibrated_std = calibrated_std_of(scenario);
   if (options.baseline_rms_mm == 0.0) options.baseline_rms_mm = scenario.calibrated_baseline_rms_mm;
+  if (options.baseline_rms_by_channel.empty()) options.baseline_rms_by_channel = scenario.calibrated_baseline_rms_by_channel;
   std::vector<Recording> recordings;
   for (const Recording& r : recordings_as_recorded) recordings.push_back(in_millimetres(r));
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
@@ -480,14 +580,15 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
     for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
     throw InputError(all);
   }
-  std::vector<std::string> candidates = options.candidates;
-  if (candidates.empty()) {
-    for (const auto& e : catalog()) candidates.emplace_back(e.name);
-  }
+  const std::vector<std::string> candidates =
+      candidate_names(options.candidates, level_channels_of(recordings, options.channels), recordings);
   scenario_engine::Engine engine(scenario, recordings, options);
   PipelineSettings settings;
   settings.none_noise_factor = options.none_noise_factor;
   settings.tolerated_rms = options.baseline_factor * options.baseline_rms_mm;
+  for (const auto& [channel, rms] : options.baseline_rms_by_channel) {
+    settings.tolerated_by_channel[channel] = options.baseline_factor * rms;
+  }
   settings.tests = options.tests;
   settings.locate = options.locate;
   settings.progress = options.progress;

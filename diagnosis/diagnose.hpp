@@ -83,6 +83,8 @@ struct DiagnoseOptions {
   // ordinary course (model form: grid, gate law); a residual within baseline_factor times it is
   // not a change of the canal, and the verdict is `none` when no effect is significant.
   double baseline_rms_mm = 0.0;  // >= 0
+  // The same for each level channel (0 or missing: baseline_rms_mm stands for it).
+  std::map<std::string, double> baseline_rms_by_channel;
   double baseline_factor = 2.0;  // > 0
   ResidualTestOptions tests;
   LocateOptions locate;

@@ -121,7 +121,7 @@ Engine::JointFit Engine::fit_jointly(std::vector<EffectAt> start, const std::vec
   std::vector<double> z, steps, lower, upper;
   for (std::size_t i = 0; i < start.size(); ++i) {
     if (!free[i]) continue;
-    const EffectInfo& e = info(start[i].effect);
+    const EffectKind& e = *start[i].effect.kind;
     index.push_back(i);
     z.push_back(std::clamp(start[i].theta, e.theta_low, e.theta_high));
     steps.push_back(kStepShare * (e.theta_high - e.theta_low));
@@ -170,19 +170,19 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
                                                         const std::string& candidate) {
   const Effect added = *effect_from_name(candidate);
   // The lattice is not a least-squares effect (judge()): it is tested on top of the explanation.
-  if (added == Effect::sensor_quantization) return explain_on_top(explanation, candidate);
+  if (added.kind->search == Search::lattice) return explain_on_top(explanation, candidate);
   std::vector<EffectAt> held;
   std::vector<bool> free;
   for (const auto& e : explanation) {
     const Effect effect = *effect_from_name(e.name);
     held.push_back({effect, to_theta(effect, e.parameter.value)});
-    free.push_back(effect != Effect::sensor_quantization);
+    free.push_back(effect.kind->search != Search::lattice);
   }
   const Point without = evaluate(held, kReadings);
   // Start from the candidate at "no effect", or at its own fit when that already improves on the
   // explanation (the rate limit's cost is flat near the ideal gate: no gradient to follow there).
   std::vector<EffectAt> start = held;
-  start.push_back({added, info(added).theta_none});
+  start.push_back({added, added.kind->theta_none});
   const auto alone = best_.find(candidate);
   if (alone != best_.end() && std::isfinite(alone->second.theta)) {
     std::vector<EffectAt> from_alone = held;

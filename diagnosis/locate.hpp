@@ -40,6 +40,7 @@ struct RecordingResiduals {
   std::vector<double> regime;         // RegimeCode values, or empty
   std::string primary;                // the channel whose residual is located in time/frequency
   std::map<std::string, std::vector<double>> residuals;  // channel -> data - model
+  std::map<std::string, std::vector<double>> recorded;   // level channel -> recorded series (noise estimates)
   double nrmse_percent = 0.0;         // primary-channel Nrmse (eq. 19) of the model
 };
 

@@ -30,6 +30,7 @@ using reduced::ModelKind;
 constexpr const char* kUpstream = "upstream_level_variation";
 constexpr const char* kRegime = "flow_regime_switch";
 constexpr const char* kWave = "wave_resonance";
+constexpr const char* kQuantization = "sensor_quantization[y_dwe_mm]";
 
 
 // Free-flow share of the samples by the paper's condition (8), with the gate position where it
@@ -183,7 +184,10 @@ class ModelEngine {
     r.delta_bic = bic_change(effective_fit_samples(), nominal_scores_.fit_mse, after.fit_mse, extra);
     // "Show the fit improve": the held-out Nrmse (mean over recordings) must rise too — the pooled
     // squared residual can fall through one recording while the others get worse.
-    r.significant = is_significant(r, {o_.min_score, o_.min_bic_gain, true});
+    r.heldout_improves = r.heldout_nrmse_after > r.heldout_nrmse_before;  // one channel: y_dwe_mm
+    const SignificanceRule rule{o_.min_score, o_.min_bic_gain, true};
+    r.significant = is_significant(r, rule);
+    r.set_aside = set_aside_reason(r, rule);
     judged_[name] = p;
     return r;
   }
@@ -285,7 +289,7 @@ EffectResult gate_rate_limit(const ModelEngine& e) {
     std_v = sd_theta * v * v;  // dv = v² dθ
   }
   return e.judge("gate_rate_limit", e.predict(chosen), 1,
-                 {"speed", "mm/s", v, std_v}, is_material(Effect::gate_rate_limit, v));
+                 {"speed", "mm/s", v, std_v}, is_material(*effect_from_name("gate_rate_limit"), v));
 }
 
 EffectResult sensor_quantization(const ModelEngine& e) {
@@ -296,9 +300,9 @@ EffectResult sensor_quantization(const ModelEngine& e) {
   const reduced::SensorLattice lattice = reduced::recorded_lattice(data);
   const double r = lattice.step;
   const double modelled = e.nominal().actuation.quantum_mm;
-  if (r == 0.0) return not_expressible("sensor_quantization", "the recorded levels lie on no lattice");
+  if (r == 0.0) return not_expressible(kQuantization, "the recorded levels lie on no lattice");
   if (r <= 1.5 * modelled) {
-    return not_expressible("sensor_quantization",
+    return not_expressible(kQuantization,
                            "the recorded lattice (" + format_g(r) + " mm) is the modelled resolution");
   }
   // The corrected prediction is the nominal model's level read by the coarser sensor: its
@@ -320,8 +324,8 @@ EffectResult sensor_quantization(const ModelEngine& e) {
   for (auto& series : p) {
     for (double& y : series) y = lattice.origin + expected_reading(y - lattice.origin, r, spread);
   }
-  EffectResult res = e.judge("sensor_quantization", p, 1, {"resolution", "mm", r, 0.0},
-                             is_material(Effect::sensor_quantization, r));
+  EffectResult res = e.judge(kQuantization, p, 1, {"resolution", "mm", r, 0.0},
+                             is_material(*effect_from_name(kQuantization), r));
   // A lattice is seen directly in the data, not through a better prediction (quantising a model
   // that is slightly off can move its output to the wrong step): every level on the lattice,
   // coarser than the modelled resolution, is the evidence.
@@ -461,13 +465,17 @@ EffectResult wave_resonance(const ModelEngine& e) {
 
 EffectResult evaluate(const std::string& name, const ModelEngine& e) {
   if (name == "gate_rate_limit") return gate_rate_limit(e);
-  if (name == "sensor_quantization") return sensor_quantization(e);
+  if (name == kQuantization) return sensor_quantization(e);
   if (name == kUpstream) return upstream_level_variation(e);
   if (name == kRegime) return flow_regime_switch(e);
   if (name == kWave) return wave_resonance(e);
-  const std::string absorbed = name == "sensor_delay"    ? "the delay L"
-                               : name == "sensor_offset" ? "the operating point y0"
-                                                         : "the gain and time constant";
+  const std::string kind = name.substr(0, name.find('['));
+  if (kind == "sensor_drift" || kind == "command_drift") {
+    return not_expressible(name, "a reduced model fitted to the whole record has no time-varying term for it");
+  }
+  const std::string absorbed = kind == "sensor_delay" || kind == "command_delay"  ? "the delay L"
+                               : kind == "sensor_offset" || kind == "level_datum" ? "the operating point y0"
+                                                                                   : "the gain and time constant";
   return not_expressible(name, "a reduced model absorbs it into " + absorbed + " (not identifiable)");
 }
 
@@ -536,7 +544,8 @@ class ModelExplainer final : public Explainer {
 
 std::vector<std::string> model_effect_names() {
   std::vector<std::string> names;
-  for (const auto& e : catalog()) names.emplace_back(e.name);
+  // A reduced model predicts y_dwe_mm alone: the catalog's per-channel effects on that channel.
+  for (const Effect& e : effects_for({columns::level_downstream_end})) names.push_back(e.name());
   names.emplace_back(kUpstream);
   names.emplace_back(kRegime);
   names.emplace_back(kWave);
@@ -558,10 +567,15 @@ Status ModelDiagnoseOptions::validate() const {
   std::string names;
   for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
   for (const auto& c : candidates) {
-    check.require(std::find(known.begin(), known.end(), c) != known.end(), "candidates",
+    check.require(std::find(known.begin(), known.end(), model_effect_name(c)) != known.end(), "candidates",
                   "unknown effect '" + c + "' (expected one of " + names + ")");
   }
   return check.status();
+}
+
+std::string model_effect_name(const std::string& name) {
+  const EffectKind* kind = kind_named(name);
+  return kind && kind->scope == Scope::each_level_channel ? name + "[" + columns::level_downstream_end + "]" : name;
 }
 
 ModeResponse damped_mode_response(const std::vector<double>& x, double h, double frequency_hz, double damping) {
@@ -590,7 +604,8 @@ ModeResponse damped_mode_response(const std::vector<double>& x, double h, double
 Diagnosis diagnose_model(const std::vector<Recording>& recordings, const ModelDiagnoseOptions& options) {
   if (const Status status = options.validate(); !status) throw InputError("diagnose --model: " + status.message());
   if (recordings.empty()) throw InputError("diagnose --model: no recordings");
-  const std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
+  std::vector<std::string> candidates = options.candidates.empty() ? model_effect_names() : options.candidates;
+  for (auto& c : candidates) c = model_effect_name(c);
   ModelExplainer explainer(recordings, options);  // throws InputError naming a recording it cannot use
   PipelineSettings settings;
   settings.none_noise_factor = options.none_noise_factor;

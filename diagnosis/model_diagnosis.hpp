@@ -58,6 +58,9 @@ struct ModelDiagnoseOptions {
 
 // The effect names `diagnose --model` knows: the scenario catalog's and the three of reduced
 // models (upstream_level_variation, flow_regime_switch, wave_resonance).
+// A per-channel catalog row named without its channel stands for it on y_dwe_mm, the channel a
+// reduced model predicts ("sensor_quantization" → "sensor_quantization[y_dwe_mm]").
+std::string model_effect_name(const std::string& name);
 std::vector<std::string> model_effect_names();
 
 // Runs the diagnosis. Throws InputError on invalid options, unknown candidates or recordings

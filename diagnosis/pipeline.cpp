@@ -81,7 +81,7 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
     const auto before = explainer.nominal_residuals();
     d.mismatch = locate(before, settings.locate);
     d.tests_before = tests_of(before, settings.tests);
-    set_noise_figures(before, explainer.sensor_resolution(), d);
+    set_noise_figures(before, explainer.sensor_resolution(), settings, d);
     explainer.describe(d);
 
     for (std::size_t i = 0; i < candidates.size(); ++i) {
@@ -93,7 +93,7 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
       if (a.note.empty() != b.note.empty()) return a.note.empty();
       return a.score > b.score;
     });
-    const std::string corrected = set_verdict(d, settings.none_noise_factor, settings.tolerated_rms) ? d.verdict : "";
+    const std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
     if (!corrected.empty()) {
       explain_with_several(explainer, settings, d,
                            [&](const std::string& candidate) { progress(0.95, "explanation: " + candidate); });
@@ -102,6 +102,11 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
     d.mismatch_after = locate(after, settings.locate);
     d.tests_after = tests_of(after, settings.tests);
     d.series = explainer.series_with(corrected);
+    progress(0.97, "detection thresholds");
+    explainer.detection_thresholds(candidates, corrected, d);
+    if (d.verdict == "none" && !d.thresholds.empty()) {
+      d.reason += "; effects smaller than their detection thresholds were not visible in these recordings";
+    }
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {
@@ -120,10 +125,67 @@ double bic_change(double n_eff, double cost_before, double cost_after, int extra
 
 bool is_significant(const EffectResult& e, const SignificanceRule& rule) {
   return e.material && e.score >= rule.min_score && -e.delta_bic >= rule.min_bic_gain &&
-         (!rule.heldout_nrmse_must_rise || e.heldout_nrmse_after > e.heldout_nrmse_before);
+         (!rule.heldout_fit_must_improve || e.heldout_improves);
 }
 
-void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d) {
+namespace {
+
+// One level channel's figures over every recording: its noise (each recording's estimate from the
+// recorded series, pooled in quadrature) and the nominal residual RMS.
+ChannelFigures channel_figures(const std::vector<RecordingResiduals>& sets, const std::string& channel, double resolution) {
+  ChannelFigures f;
+  f.name = channel;
+  double noise_sq = 0.0, rms_sq = 0.0;
+  std::size_t n = 0, recordings = 0;
+  for (const auto& r : sets) {
+    const auto e = r.residuals.find(channel);
+    if (e == r.residuals.end()) continue;
+    const auto y = r.recorded.find(channel);
+    const std::vector<double>& recorded = y != r.recorded.end() ? y->second : r.level;
+    const double sigma = noise_level(recorded, resolution);
+    noise_sq += sigma * sigma;
+    ++recordings;
+    rms_sq += std::inner_product(e->second.begin(), e->second.end(), e->second.begin(), 0.0);
+    n += e->second.size();
+  }
+  f.noise = std::sqrt(noise_sq / static_cast<double>(std::max<std::size_t>(recordings, 1)));
+  f.rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
+  return f;
+}
+
+std::string mm(double v) { return format_fixed(v, 3) + " mm"; }
+
+// "y_up_mm RMS 2.03 mm (noise 0.05 mm, tolerated 0.54 mm)"
+std::string describe(const ChannelFigures& c) {
+  return c.name + " RMS " + mm(c.rms) + " (noise " + mm(c.noise) +
+         (c.tolerated > 0.0 ? ", tolerated " + mm(c.tolerated) : std::string()) + ")";
+}
+
+}  // namespace
+
+bool DetectionThreshold::reveals(double value) const {
+  return (std::isfinite(below) && value <= below) || (std::isfinite(above) && value >= above);
+}
+
+std::string set_aside_reason(const EffectResult& e, const SignificanceRule& rule) {
+  std::vector<std::string> why;
+  if (!e.material) why.push_back("not material (" + e.parameter.name + " " + format_g(e.parameter.value, 3) +
+                                 " within the smallest change of interest or what the calibration leaves open)");
+  if (e.score < rule.min_score) why.push_back("held-out score " + format_g(e.score, 2) + " < " + format_g(rule.min_score));
+  if (-e.delta_bic < rule.min_bic_gain) {
+    why.push_back("BIC gain " + format_g(-e.delta_bic, 3) + " < " + format_g(rule.min_bic_gain));
+  }
+  if (rule.heldout_fit_must_improve && !e.heldout_improves) {
+    why.push_back(e.worsened.empty() ? std::string("the held-out fit does not improve")
+                                     : "the held-out fit of " + e.worsened + " gets worse");
+  }
+  std::string out;
+  for (const auto& w : why) out += (out.empty() ? "" : "; ") + w;
+  return out;
+}
+
+void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, const PipelineSettings& settings,
+                       Diagnosis& d) {
   double noise_sq = 0.0, rms_sq = 0.0, spread_sq = 0.0;
   std::size_t n = 0;
   for (const auto& r : sets) {
@@ -141,34 +203,60 @@ void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resol
   d.noise = std::sqrt(noise_sq / count);
   d.nominal_rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
   d.noise_limit_nrmse = 100.0 * (1.0 - d.noise / std::sqrt(std::max(spread_sq / count, 1e-300)));
+
+  // Every level channel the recordings carry, the primary first.
+  std::vector<std::string> names;
+  if (!sets.empty()) names.push_back(sets.front().primary);
+  for (const auto& r : sets) {
+    for (const auto& [channel, e] : r.residuals) {
+      const bool level = channel == r.primary || r.recorded.count(channel) > 0;
+      if (level && std::find(names.begin(), names.end(), channel) == names.end()) names.push_back(channel);
+    }
+  }
+  d.channels.clear();
+  for (const auto& name : names) {
+    ChannelFigures f = channel_figures(sets, name, resolution);
+    const auto own = settings.tolerated_by_channel.find(name);
+    f.tolerated = own != settings.tolerated_by_channel.end() ? own->second : settings.tolerated_rms;
+    f.ordinary = f.rms <= settings.none_noise_factor * f.noise || (f.tolerated > 0.0 && f.rms <= f.tolerated);
+    d.channels.push_back(std::move(f));
+  }
 }
 
-bool set_verdict(Diagnosis& d, double none_noise_factor, double tolerated_rms) {
-  const bool ordinary = tolerated_rms > 0.0 && d.nominal_rms <= tolerated_rms;
-  const bool within_noise = d.nominal_rms <= none_noise_factor * d.noise || ordinary ||
-                            std::all_of(d.tests_before.begin(), d.tests_before.end(),
-                                        [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
+bool set_verdict(Diagnosis& d, double none_noise_factor) {
   if (!d.effects.empty() && d.effects.front().significant) {
     const EffectResult& w = d.effects.front();
     d.verdict = w.name;
-    d.reason = w.name == "sensor_quantization"
+    d.reason = w.name.rfind("sensor_quantization", 0) == 0
                    ? "the held-out levels lie on a " + format_g(w.parameter.value) + " mm lattice (coherence " +
                          format_g(std::round(100.0 * w.score) / 100.0) + ")"
                    : w.name + " reduces the held-out cost by " + format_g(std::round(100.0 * w.score)) + "% (" +
                          w.parameter.name + " = " + format_g(w.parameter.value) + " " + w.parameter.unit + ")";
     return true;
   }
-  if (within_noise) {
+  // The primary channel is also ordinary when its residual passes the residual tests (white and
+  // uncorrelated with the input: nothing a model could still explain).
+  const bool primary_white = std::all_of(d.tests_before.begin(), d.tests_before.end(),
+                                         [](const ResidualTests& t) { return t.white() && t.uncorrelated(); });
+  const ChannelFigures* unusual = nullptr;
+  for (const auto& c : d.channels) {
+    const bool ordinary = c.ordinary || (&c == &d.channels.front() && primary_white);
+    if (!ordinary && (!unusual || c.rms / std::max(c.noise, 1e-12) > unusual->rms / std::max(unusual->noise, 1e-12))) {
+      unusual = &c;
+    }
+  }
+  if (!unusual) {
     d.verdict = "none";
-    d.reason = ordinary && d.nominal_rms > none_noise_factor * d.noise
-                   ? "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) is within what the calibration leaves on "
-                         "its baseline (" + format_g(tolerated_rms) + " mm) and no candidate improves the held-out fit"
-                   : "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) is within the measurement noise (" +
-                         format_g(d.noise) + " mm) and no candidate improves the held-out fit";
+    std::string figures;
+    for (const auto& c : d.channels) figures += (figures.empty() ? "" : "; ") + describe(c);
+    d.reason = "the nominal residual is within " + format_g(none_noise_factor) +
+               " x the noise or what the calibration leaves on its baseline on every level channel (" + figures +
+               ") and no candidate improves the held-out fit";
   } else {
     d.verdict = "unexplained";
-    d.reason = "the nominal residual (RMS " + format_g(d.nominal_rms) + " mm) exceeds " + format_g(none_noise_factor) +
-               " x the noise (" + format_g(d.noise) + " mm) and no candidate improves the held-out fit significantly";
+    d.reason = "the nominal residual on " + describe(*unusual) + " exceeds " + format_g(none_noise_factor) +
+               " x the noise" + (unusual->tolerated > 0.0 ? " and what the calibration tolerates" : "") +
+               ", and no candidate improves the held-out fit significantly";
   }
   return false;
 }

@@ -11,7 +11,10 @@
 //      such that neither it adds to the verdict nor the verdict to it is reported with the
 //      verdict as an ambiguous pair (the recordings cannot tell them apart), with the experiment
 //      that would;
-//   6. the corrected prediction of the verdict → locate and test again.
+//   6. the corrected prediction of the verdict → locate and test again;
+//   7. what the recordings cannot show: each candidate's detection threshold, from the residual
+//      the model with the verdict leaves and the candidate's signature (its prediction's change
+//      per unit of its parameter), under the significance rule (Explainer::detection_thresholds).
 //
 // An Explainer is the model-specific part: the scenario engine (diagnose.hpp, re-simulating the
 // canal) and the reduced-model engine (model_diagnosis.hpp, refitting a reduced model) implement
@@ -48,6 +51,11 @@ struct EffectResult {
   double cost_before = 0.0, cost_after = 0.0;                    // channel-balanced, fitted part
   double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
   double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
+  // The held-out fit improves on some compared channel and gets materially worse on none (the
+  // engine's judgement; for one channel: its held-out Nrmse rises).
+  bool heldout_improves = false;
+  std::string worsened;          // a channel whose held-out fit the effect makes worse, if any
+  std::string set_aside;         // why a fitted effect is not significant (set_aside_reason)
   int simulations = 0;           // re-simulations spent on the fit
   std::string note;              // why it was skipped, if it was
 };
@@ -78,6 +86,29 @@ struct JointExplanation {
   bool explanation_adds = false;
 };
 
+// What the nominal model misses on one level channel, against what that channel's noise and the
+// calibration's baseline make ordinary.
+struct ChannelFigures {
+  std::string name;
+  double noise = 0.0;       // estimated from the recorded channel itself [mm]
+  double rms = 0.0;         // nominal residual RMS [mm]
+  double tolerated = 0.0;   // what the calibration leaves on its baseline, times the factor [mm]; 0 = none
+  // rms ≤ none_noise_factor × noise or ≤ tolerated
+  bool ordinary = true;
+};
+
+// What the recordings cannot show: the smallest value of an effect's parameter, on either side of
+// "no effect", that these recordings would reveal against the model under the pipeline's own
+// significance rule (step 7 of the pipeline). The effect is revealed when its parameter is
+// at most `below` or at least `above` (NaN: no such side within the catalog's range).
+struct DetectionThreshold {
+  std::string effect;
+  std::string parameter, unit;
+  double below = 0.0, above = 0.0;
+  // Whether a parameter value would be revealed.
+  bool reveals(double value) const;
+};
+
 // Per-recording series for plots (primary channel, mm).
 struct RecordingSeries {
   std::string name;
@@ -99,6 +130,9 @@ struct Diagnosis {
   double noise = 0.0;            // estimated measurement noise of the primary channel [mm]
   double noise_limit_nrmse = 0.0;  // Nrmse a perfect model would reach given that noise
   double nominal_rms = 0.0;      // primary residual RMS of the nominal model [mm]
+  std::vector<ChannelFigures> channels;  // every level channel, the primary first
+  std::vector<DetectionThreshold> thresholds;  // per candidate the engine can judge so
+  std::string lowering_experiment;   // the experiment that would lower the largest thresholds
   std::vector<RecordingSeries> series;
   std::map<std::string, double> channel_scale;  // s_c of the cost weights
   double seconds = 0.0;
@@ -127,12 +161,19 @@ class Explainer {
                                                           const std::string& /*candidate*/) {
     return std::nullopt;
   }
+  // Step 7: the detection threshold of each candidate against the model with `verdict` ("" =
+  // nominal), and the experiment that would lower the largest (d.thresholds,
+  // d.lowering_experiment). Nothing when the engine cannot compute them.
+  virtual void detection_thresholds(const std::vector<std::string>& /*candidates*/, const std::string& /*verdict*/,
+                                    Diagnosis& /*d*/) {}
 };
 
 struct PipelineSettings {
-  double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise
+  double none_noise_factor = 3.0;  // "within the noise": a channel's RMS <= this × its noise
   // A primary RMS up to this is ordinary too [mm] (what a calibration leaves on its baseline).
   double tolerated_rms = 0.0;
+  // The same for other level channels, by name; a channel without one takes tolerated_rms.
+  std::map<std::string, double> tolerated_by_channel;
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;       // share of the candidates explained, and the candidate
@@ -153,23 +194,30 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
 double bic_change(double n_eff, double cost_before, double cost_after, int extra_parameters = 1);
 
 // The significance rule of every engine: a material parameter, a held-out cost reduction of at
-// least min_score and a BIC gain of at least min_bic_gain; optionally the held-out Nrmse must
-// rise too ("show the fit improve": a pooled cost can fall through one recording while the others
-// get worse).
+// least min_score and a BIC gain of at least min_bic_gain; optionally the held-out fit must
+// improve on a channel and worsen on none too ("show the fit improve": a pooled cost can fall
+// through one channel or recording while another gets worse).
 struct SignificanceRule {
   double min_score = 0.15;
   double min_bic_gain = 10.0;
-  bool heldout_nrmse_must_rise = false;
+  bool heldout_fit_must_improve = false;
 };
 bool is_significant(const EffectResult& effect, const SignificanceRule& rule);
+// Why `effect` fails the rule, every failed condition in words ("not material: ..."); empty when
+// it passes. The engines store it in EffectResult::set_aside, so that a better-scoring candidate
+// the verdict passed over says why.
+std::string set_aside_reason(const EffectResult& effect, const SignificanceRule& rule);
 
 // Noise of the primary channel estimated from the recordings themselves, the nominal residual RMS
-// and the Nrmse a perfect model would reach given that noise (fields of `d`).
-void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, Diagnosis& d);
+// and the Nrmse a perfect model would reach given that noise; the same figures for every level
+// channel (d.channels) with what `settings` tolerates on it (fields of `d`).
+void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, const PipelineSettings& settings,
+                       Diagnosis& d);
 
-// Verdict and reason from the ranked effects and the nominal residual tests: the first effect
-// when it is significant (returns true); else `none` when the nominal residual is within
-// none_noise_factor × the noise or `tolerated_rms`, or passes the residual tests; else `unexplained`.
-bool set_verdict(Diagnosis& d, double none_noise_factor, double tolerated_rms = 0.0);
+// Verdict and reason from the ranked effects and the nominal residual figures: the first effect
+// when it is significant (returns true); else `none` when every level channel is ordinary
+// (d.channels: within none_noise_factor × its noise, or what the calibration tolerates; the
+// primary also when it passes the residual tests); else `unexplained`, naming the channel.
+bool set_verdict(Diagnosis& d, double none_noise_factor);
 
 }  // namespace canalsim::diagnosis

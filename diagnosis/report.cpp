@@ -113,6 +113,27 @@ std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& line
 
 }  // namespace
 
+namespace {
+
+json thresholds_json(const Diagnosis& d) {
+  json out = json::array();
+  for (const auto& t : d.thresholds) {
+    out.push_back({{"effect", t.effect}, {"parameter", t.parameter}, {"unit", t.unit}, {"revealed_at_or_below", number(t.below)},
+                   {"revealed_at_or_above", number(t.above)}});
+  }
+  return out;
+}
+
+// "≤ −0.31 or ≥ 0.29 mm", "≤ 12 mm/s", "not within the catalog's range".
+std::string threshold_text(const DetectionThreshold& t) {
+  std::string out;
+  if (std::isfinite(t.below)) out += "<= " + format_g(t.below, 3);
+  if (std::isfinite(t.above)) out += (out.empty() ? "" : " or ") + std::string(">= ") + format_g(t.above, 3);
+  return out.empty() ? "not revealed within the catalog's range" : t.parameter + " " + out + " " + t.unit;
+}
+
+}  // namespace
+
 json to_json(const Diagnosis& d) {
   json effects = json::array();
   for (const auto& e : d.effects) {
@@ -127,7 +148,8 @@ json to_json(const Diagnosis& d) {
                        {"cost_before", number(e.cost_before)}, {"cost_after", number(e.cost_after)},
                        {"heldout_cost_before", number(e.heldout_cost_before)},
                        {"heldout_cost_after", number(e.heldout_cost_after)}, {"delta_bic", number(e.delta_bic)},
-                       {"simulations", e.simulations}, {"note", e.note}});
+                       {"simulations", e.simulations}, {"note", e.note},
+                       {"heldout_improves", e.heldout_improves}, {"set_aside", e.set_aside}});
   }
   json tests = json::array();
   for (std::size_t i = 0; i < d.tests_before.size(); ++i) {
@@ -158,7 +180,25 @@ json to_json(const Diagnosis& d) {
                          {"scores", {number(a.first_score), number(a.second_score)}},
                          {"separating_experiment", a.separating_experiment}});
   }
+  json channels = json::array();
+  for (const auto& c : d.channels) {
+    channels.push_back({{"name", c.name}, {"nominal_rms_mm", number(c.rms)}, {"noise_mm", number(c.noise)},
+                        {"tolerated_mm", number(c.tolerated)}, {"ordinary", c.ordinary}});
+  }
+  // The candidates that scored above the verdict and why each was passed over.
+  json passed_over = json::array();
+  double verdict_score = 0.1;  // below this a candidate explains too little to be a contender
+  for (const auto& e : d.effects) {
+    if (e.name == d.verdict) verdict_score = std::max(verdict_score, e.score);
+  }
+  for (const auto& e : d.effects) {
+    if (!e.significant && e.note.empty() && e.score > verdict_score) {
+      passed_over.push_back({{"name", e.name}, {"score", number(e.score)}, {"why", e.set_aside}});
+    }
+  }
   json out{{"ok", d.ok}, {"verdict", d.verdict}, {"reason", d.reason}, {"explanation", explanation},
+           {"channels", channels}, {"passed_over", passed_over}, {"thresholds", thresholds_json(d)},
+           {"lowering_experiment", d.lowering_experiment},
            {"ambiguous", ambiguous}, {"effects", effects},
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
            {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
@@ -189,7 +229,22 @@ std::string text_summary(const Diagnosis& d) {
       << a.separating_experiment << '\n';
   }
   s << "noise " << fixed(d.noise, 3) << " mm, nominal residual RMS " << fixed(d.nominal_rms, 3)
-    << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n\n";
+    << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n";
+  for (const auto& c : d.channels) {
+    s << "  " << c.name << ": nominal RMS " << fixed(c.rms, 3) << " mm, noise " << fixed(c.noise, 3) << " mm"
+      << (c.tolerated > 0.0 ? ", tolerated " + fixed(c.tolerated, 3) + " mm" : std::string())
+      << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
+  }
+  if (!d.thresholds.empty()) {
+    s << "detection thresholds (what these recordings would reveal):\n";
+    for (const auto& t : d.thresholds) s << "  " << t.effect << ": " << threshold_text(t) << '\n';
+    if (!d.lowering_experiment.empty()) s << "  " << d.lowering_experiment << '\n';
+  }
+  for (const auto& e : to_json(d)["passed_over"]) {
+    s << "set aside: " << e["name"].get<std::string>() << " (score " << fixed(e["score"].get<double>(), 2)
+      << "): " << e["why"].get<std::string>() << '\n';
+  }
+  s << '\n';
   // The name column fits the longest effect name (upstream_level_variation is 24 characters).
   int width = 22;
   for (const auto& e : d.effects) width = std::max(width, static_cast<int>(e.name.size()));
@@ -257,6 +312,16 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
       << fixed(e.heldout_nrmse_after, 2) << "</td><td>" << fixed(e.delta_bic, 0) << "</td></tr>";
   }
   s << "</table>";
+  if (!d.thresholds.empty()) {
+    s << "<h2>What these recordings cannot show</h2><p>The smallest value of each effect's parameter that these "
+         "recordings would reveal against the model under the same significance rule; effects smaller than these "
+         "were not visible.</p><table><tr><th>effect</th><th>revealed when</th></tr>";
+    for (const auto& t : d.thresholds) {
+      s << "<tr><td>" << html::escape(t.effect) << "</td><td>" << html::escape(threshold_text(t)) << "</td></tr>";
+    }
+    s << "</table>";
+    if (!d.lowering_experiment.empty()) s << "<p>" << html::escape(d.lowering_experiment) << ".</p>";
+  }
   s << "<h2>Where the mismatch lives</h2><p>";
   if (d.mismatch.band.found) {
     s << "Input&#8594;residual model significant in " << fixed(d.mismatch.band.low_hz) << "&#8211;"

@@ -60,11 +60,16 @@ class Engine final : public Explainer {
   void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
   std::optional<JointExplanation> explain_jointly(const std::vector<ExplainedEffect>& explanation,
                                                   const std::string& candidate) override;
+  void detection_thresholds(const std::vector<std::string>& candidates, const std::string& verdict,
+                            Diagnosis& d) override;
   // The engine of the same recordings whose nominal model carries `effects` (name, parameter).
   std::unique_ptr<Engine> with_effects(const std::vector<std::pair<std::string, double>>& effects) const;
+  // The level channels every recording carries, among the compared ones.
+  const std::vector<std::string>& level_channels() const { return level_channels_; }
 
  private:
   void prepare();
+  void carry_command_and_reading_effects();
   void simulate_nominal();
   const std::vector<Channels>& prediction_with(const std::string& effect) const;
   Costs costs(const std::vector<Channels>& prediction) const;
@@ -74,47 +79,58 @@ class Engine final : public Explainer {
   // levels next to gate-position glitches).
   double balanced(const Costs& c, bool heldout) const;
   Channels simulate_true(const Scenario& s, const Prepared& p);
-  // The scenario that replays recording i: the base with the carried lateral outflow, whose
-  // reference is the inflow of the engine that found it.
+  // The scenario that replays recording i: the base with the carried hydraulic effects.
   Scenario scenario_for(std::size_t i) const;
   // An effect at a value of its internal coordinate θ (catalog.hpp).
   struct EffectAt {
     Effect effect;
     double theta;
   };
+  // What the model reads with the reading effects among `effects` (the rest are ignored).
+  SensorModel sensors_with(const std::vector<EffectAt>& effects, Readings readings) const;
   std::vector<Channels> predict(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
   const std::vector<Channels>& simulated(const std::vector<EffectAt>& hydraulic);
   // theta = the last effect's
   Point evaluate(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
-  Point evaluate(Effect effect, double theta) { return evaluate({{effect, theta}}); }
+  Point evaluate(const Effect& effect, double theta) { return evaluate({{effect, theta}}); }
   std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
 
-  // The fit of each catalog effect (the effect's parameter θ at its best point).
-  Point fit_sensor_offset();
-  Point fit_sensor_delay();
-  Point fit_sensor_quantization();
-  Point fit_gate_rate_limit(int& sims);
-  Point fit_by_secant(Effect effect, const Point& start, int& sims);
-  Point rate_limit_from_position(int& sims);
-  Point rate_limit_from_levels(int& sims);
-  EffectResult unchanged(Effect effect, const Costs& model) const;
-  EffectResult judged_against(Effect effect, const Point& with, const Costs& without, double min_score,
+  // The fit of each catalog effect by its row's Search (the effect's parameter θ at its best point).
+  Point fit(const Effect& effect, int& sims);
+  Point fit_median_offset(const Effect& effect);
+  Point fit_delay_grid(const Effect& effect);
+  Point fit_linear(const Effect& effect);
+  Point fit_lattice(const Effect& effect);
+  Point fit_gate_rate_limit(const Effect& rate_limit, int& sims);
+  Point fit_by_secant(const Effect& effect, const Point& start, int& sims);
+  Point rate_limit_from_position(const Effect& rate_limit, int& sims);
+  Point rate_limit_from_levels(const Effect& rate_limit, int& sims);
+  EffectResult unchanged(const Effect& effect, const Costs& model) const;
+  EffectResult judged_against(const Effect& effect, const Point& with, const Costs& without, double min_score,
                               bool within_calibration_counts) const;
-  EffectResult judge(Effect effect, Point best, int sims);
+  EffectResult judge(const Effect& effect, Point best, int sims);
   // Explanations with several effects (joint_fit.cpp).
   struct JointFit;
   JointFit fit_jointly(std::vector<EffectAt> start, const std::vector<bool>& free);
   std::optional<JointExplanation> explain_on_top(const std::vector<ExplainedEffect>& explanation,
                                                  const std::string& candidate) const;
-  double parameter_std(Effect effect, const Point& best) const;
-  bool beyond_calibration(Effect effect, double parameter) const;
-  double lattice_resolution() const;
+  double parameter_std(const Effect& effect, const Point& best) const;
+  bool beyond_calibration(const Effect& effect, double parameter) const;
+  // The recorded level channels an effect reads: its own channel, or every level channel.
+  std::vector<std::string> channels_of(const Effect& effect) const;
+  double lattice_resolution(const std::vector<std::string>& channels) const;
+  double lattice_phase(const std::string& channel, double resolution) const;
   double reading_spread(double resolution) const;
-  double heldout_coherence(double r) const;
+  double heldout_coherence(double r, const std::vector<std::string>& channels) const;
+  // Detection thresholds (thresholds.cpp).
+  struct Signature;
+  Signature signature_of(const Effect& effect, const std::vector<Channels>& model, const std::vector<Channels>& base);
+  DetectionThreshold threshold_of(const Effect& effect, const Signature& signature) const;
 
-  Scenario base_;                    // with the effects an explanation carries (with_effects)
-  double carried_lateral_ = 0.0;     // lateral_outflow carried, fraction of carried_inflow_m3s_
-  std::vector<double> carried_inflow_m3s_;
+  Scenario base_;                    // with the hydraulic effects an explanation carries (with_effects)
+  // The command and reading effects an explanation carries (with_effects), applied in prepare().
+  std::vector<std::pair<Effect, double>> carried_;
+  std::vector<double> carried_inflow_m3s_;  // the reference of a carried share of the inflow
   const std::vector<Recording>& recordings_;
   const DiagnoseOptions& o_;
   std::vector<Prepared> recs_;
@@ -129,7 +145,8 @@ class Engine final : public Explainer {
   double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
   std::size_t fit_samples_ = 0;
   std::map<std::string, Point> best_;
-  std::map<std::vector<double>, std::vector<Channels>> simulations_;  // simulated(): by effect and θ
+  std::map<std::vector<std::pair<std::string, double>>, std::vector<Channels>> simulations_;  // simulated(): by effect and θ
+  std::vector<std::string> level_channels_;
   int simulations_run_ = 0;          // replays of all recordings simulated() ran
 };
 

@@ -64,8 +64,8 @@ double refine_lattice(const std::vector<const std::vector<double>*>& series, dou
 // Gauss–Newton with a secant Jacobian on the weighted residual vector: each step solves the
 // one-parameter linearisation r(θ) ≈ r_best + J (θ − θ_best) between the best point and its
 // nearest neighbour, within the catalog range.
-Point Engine::fit_by_secant(Effect effect, const Point& start, int& sims) {
-  const EffectInfo& e = info(effect);
+Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims) {
+  const EffectKind& e = *effect.kind;
   std::vector<Point> pts;
   pts.push_back(start);
   pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
@@ -104,7 +104,7 @@ Point Engine::fit_by_secant(Effect effect, const Point& start, int& sims) {
 
 // The rate limit shows directly in the recorded gate position: fit the actuator speed to x_up
 // against the command (golden section on θ = 1/v), then simulate once at the estimate.
-Point Engine::rate_limit_from_position(int& sims) {
+Point Engine::rate_limit_from_position(const Effect& rate_limit, int& sims) {
   std::vector<std::vector<double>> instants;
   for (const auto& p : recs_) {
     std::vector<double> at(p.n);
@@ -122,7 +122,7 @@ Point Engine::rate_limit_from_position(int& sims) {
     }
     return s;
   };
-  const EffectInfo& e = info(Effect::gate_rate_limit);
+  const EffectKind& e = *rate_limit.kind;
   // Coarse logarithmic scan in speed first: the cost has a plateau at high speed.
   double best_theta = 0.0, best_cost = cost(0.0);
   for (double v = 0.5; v <= 400.0; v *= 1.1) {
@@ -144,18 +144,22 @@ Point Engine::rate_limit_from_position(int& sims) {
   }
   if (best_theta <= 0.0) return nominal_point_;
   ++sims;
-  return evaluate(Effect::gate_rate_limit, best_theta);
+  return evaluate(rate_limit, best_theta);
 }
 
-// The largest resolution r whose lattice r·k holds the recorded levels: |mean exp(2πi y/r)| near 1
-// over a channel that spans at least six lattice steps. The scenario's resolution when none does.
-double Engine::lattice_resolution() const {
-  // Differences from each series' first sample: on the lattice when the samples are, and only
-  // tens of steps from zero, so a coarse scan already finds the right multiples.
+// The largest resolution r whose lattice r·k holds the recorded levels of `channels`:
+// |mean exp(2πi y/r)| near 1 over a channel that spans at least six lattice steps. The scenario's
+// resolution when none does.
+double Engine::lattice_resolution(const std::vector<std::string>& channels) const {
+  // Differences from each series' first sample: on the lattice when the samples are (whatever
+  // the lattice's offset), and only tens of steps from zero, so a coarse scan already finds the
+  // right multiples.
   std::vector<std::vector<double>> diffs;
   for (const auto& p : recs_) {
-    for (const auto& [c, y] : p.data) {
-      if (!is_level(c) || y.empty()) continue;
+    for (const auto& c : channels) {
+      const auto it = p.data.find(c);
+      if (it == p.data.end() || it->second.empty()) continue;
+      const auto& y = it->second;
       std::vector<double> d(y.size());
       for (std::size_t k = 0; k < y.size(); ++k) d[k] = y[k] - y.front();
       diffs.push_back(std::move(d));
@@ -163,7 +167,7 @@ double Engine::lattice_resolution() const {
   }
   std::vector<const std::vector<double>*> series;
   for (const auto& d : diffs) series.push_back(&d);
-  for (double r = info(Effect::sensor_quantization).theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
+  for (double r = kind_named("sensor_quantization")->theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
     double coherent = 0.0, total = 0.0;
     for (const auto* y : series) {
       const auto [lo, hi] = std::minmax_element(y->begin(), y->end());
@@ -178,13 +182,30 @@ double Engine::lattice_resolution() const {
   return sensors_.resolution_mm;
 }
 
-// Lattice coherence |mean exp(2πi (y - y_first)/r)| of the held-out recorded levels.
-double Engine::heldout_coherence(double r) const {
+// Where the lattice of resolution r sits for one recorded channel: the offset o in [0, r) of
+// o + k·r, from the mean phase of exp(2πi y / r).
+double Engine::lattice_phase(const std::string& channel, double r) const {
+  if (!(r > 0.0)) return 0.0;
+  std::complex<double> sum = 0.0;
+  for (const auto& p : recs_) {
+    const auto it = p.data.find(channel);
+    if (it == p.data.end()) continue;
+    for (double v : it->second) sum += std::polar(1.0, 2.0 * std::numbers::pi * v / r);
+  }
+  if (std::abs(sum) == 0.0) return 0.0;
+  const double o = std::arg(sum) / (2.0 * std::numbers::pi) * r;
+  return o < 0.0 ? o + r : o;
+}
+
+// Lattice coherence |mean exp(2πi (y - y_first)/r)| of the held-out recorded levels of `channels`.
+double Engine::heldout_coherence(double r, const std::vector<std::string>& channels) const {
   std::complex<double> sum = 0.0;
   double count = 0.0;
   for (const auto& p : recs_) {
-    for (const auto& [c, y] : p.data) {
-      if (!is_level(c) || p.n_fit >= y.size()) continue;
+    for (const auto& c : channels) {
+      const auto it = p.data.find(c);
+      if (it == p.data.end() || p.n_fit >= it->second.size()) continue;
+      const auto& y = it->second;
       for (std::size_t k = p.n_fit; k < y.size(); ++k) sum += std::polar(1.0, 2.0 * std::numbers::pi * (y[k] - y[p.n_fit]) / r);
       count += static_cast<double>(y.size() - p.n_fit);
     }
@@ -192,46 +213,90 @@ double Engine::heldout_coherence(double r) const {
   return count > 0.0 ? std::abs(sum) / count : 0.0;
 }
 
+std::vector<std::string> Engine::channels_of(const Effect& effect) const {
+  if (!effect.channel.empty()) return {effect.channel};
+  return level_channels_;
+}
+
 // Median of the level residuals on the fitted parts: the offset that explains them best in the
 // least-absolute sense (robust to the transients a pure offset does not explain).
-Point Engine::fit_sensor_offset() {
+Point Engine::fit_median_offset(const Effect& effect) {
   std::vector<double> d;
   for (std::size_t i = 0; i < recs_.size(); ++i) {
-    for (const auto& [c, y] : recs_[i].data) {
-      if (!is_level(c)) continue;
+    for (const auto& c : channels_of(effect)) {
+      const auto& y = recs_[i].data.at(c);
       for (std::size_t k = 0; k < recs_[i].n_fit; ++k) d.push_back(y[k] - nominal_[i].at(c)[k]);
     }
   }
   std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return evaluate(Effect::sensor_offset, d.empty() ? 0.0 : d[d.size() / 2]);
+  return evaluate(effect, d.empty() ? 0.0 : d[d.size() / 2]);
 }
 
 // A delay re-observes the nominal simulation (no re-simulation): a 0.02 s grid over both signs
-// (a negative delay is levels that lead the command: two loggers' clocks), then the vertex of the
-// parabola through the best grid point and its neighbours.
-Point Engine::fit_sensor_delay() {
-  const EffectInfo& e = info(Effect::sensor_delay);
+// (a negative delay is readings that lead the command: two loggers' clocks), then the vertex of
+// the parabola through the best grid point and its neighbours.
+Point Engine::fit_delay_grid(const Effect& effect) {
+  const EffectKind& e = *effect.kind;
   Point best = nominal_point_;
   best.theta = 0.0;
   const int first = static_cast<int>(std::round(e.theta_low / 0.02)), last = static_cast<int>(std::round(e.theta_high / 0.02));
   for (int k = first; k <= last; ++k) {
     if (k == 0) continue;  // the nominal point
-    Point p = evaluate(Effect::sensor_delay, 0.02 * k);
+    Point p = evaluate(effect, 0.02 * k);
     if (p.cost < best.cost) best = std::move(p);
   }
   if (best.theta != 0.0 && best.theta > e.theta_low && best.theta < e.theta_high) {
-    const double a = evaluate(Effect::sensor_delay, best.theta - 0.02).cost;
-    const double c = evaluate(Effect::sensor_delay, best.theta + 0.02).cost;
+    const double a = evaluate(effect, best.theta - 0.02).cost;
+    const double c = evaluate(effect, best.theta + 0.02).cost;
     const double den = a - 2.0 * best.cost + c;
     if (den > 0.0) {
-      Point p = evaluate(Effect::sensor_delay, best.theta + 0.01 * (a - c) / den);
+      Point p = evaluate(effect, best.theta + 0.01 * (a - c) / den);
       if (p.cost < best.cost) best = std::move(p);
     }
   }
   return best;
 }
 
-Point Engine::fit_sensor_quantization() { return evaluate(Effect::sensor_quantization, lattice_resolution()); }
+// An effect the readings depend on linearly (a drift, a gain): Gauss–Newton on the weighted
+// residual vector with the signature (the prediction's change per unit of θ) of the expected
+// readings, two steps (the second takes up what the lattice of the readings bends).
+Point Engine::fit_linear(const Effect& effect) {
+  const EffectKind& e = *effect.kind;
+  Point best = nominal_point_;
+  best.theta = e.theta_none;
+  double theta = e.theta_none;
+  for (int step = 0; step < 2; ++step) {
+    const Point at = evaluate({{effect, theta}}, Readings::expected);
+    const Point probe = evaluate({{effect, theta + e.theta_probe}}, Readings::expected);
+    double jj = 0.0, jr = 0.0;
+    for (std::size_t k = 0; k < at.r.size(); ++k) {
+      const double j = (probe.r[k] - at.r[k]) / e.theta_probe;
+      jj += j * j;
+      jr += j * at.r[k];
+    }
+    if (!(jj > 0.0)) break;
+    theta = std::clamp(theta - jr / jj, e.theta_low, e.theta_high);
+    Point next = evaluate(effect, theta);
+    if (next.cost < best.cost) best = std::move(next);
+  }
+  return best;
+}
+
+Point Engine::fit_lattice(const Effect& effect) { return evaluate(effect, lattice_resolution(channels_of(effect))); }
+
+Point Engine::fit(const Effect& effect, int& sims) {
+  switch (effect.kind->search) {
+    case Search::median_offset: return fit_median_offset(effect);
+    case Search::delay_grid: return fit_delay_grid(effect);
+    case Search::linear: return fit_linear(effect);
+    case Search::lattice: return fit_lattice(effect);
+    case Search::rate_limit: return fit_gate_rate_limit(effect, sims);
+    case Search::secant: break;
+  }
+  Point start = nominal_point_;
+  start.theta = effect.kind->theta_none;
+  return fit_by_secant(effect, start, sims);
+}
 
 // From the recorded gate position when every recording has it, else by re-simulation.
 // Without a logged gate position (a laboratory logs levels) the speed must come from the levels:
@@ -239,12 +304,12 @@ Point Engine::fit_sensor_quantization() { return evaluate(Effect::sensor_quantiz
 // ever reach and steep below, which a secant in θ = 1/v from the ideal gate cannot cross (it
 // stopped at its probe); a scan of speeds a factor 2 apart over the catalog's range, then a
 // golden-section search in log speed between the best scanned point's neighbours.
-Point Engine::rate_limit_from_levels(int& sims) {
+Point Engine::rate_limit_from_levels(const Effect& rate_limit, int& sims) {
   std::map<double, Point> seen;  // by θ
   const auto at = [&](double theta) -> const Point& {
     auto it = seen.find(theta);
     if (it == seen.end()) {
-      it = seen.emplace(theta, evaluate(Effect::gate_rate_limit, theta)).first;
+      it = seen.emplace(theta, evaluate(rate_limit, theta)).first;
       ++sims;
     }
     return it->second;
@@ -272,10 +337,10 @@ Point Engine::rate_limit_from_levels(int& sims) {
   return lowest->second;
 }
 
-Point Engine::fit_gate_rate_limit(int& sims) {
+Point Engine::fit_gate_rate_limit(const Effect& rate_limit, int& sims) {
   bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
   for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
-  Point best = have_position ? rate_limit_from_position(sims) : rate_limit_from_levels(sims);
+  Point best = have_position ? rate_limit_from_position(rate_limit, sims) : rate_limit_from_levels(rate_limit, sims);
   if (std::isnan(best.theta)) best.theta = 0.0;
   return best;
 }

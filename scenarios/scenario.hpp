@@ -180,9 +180,13 @@ struct Scenario {
   // calibrate` — calibration parameter name (cd_free, manning_n, offset_y_dwe_mm, ...) → one
   // standard deviation in its unit. The diagnosis reads it as DiagnoseOptions::calibrated_std.
   std::map<std::string, double> calibrated_std;
+  // [calibration.std_alone]: the same with the other parameters held at their estimates.
+  std::map<std::string, double> calibrated_std_alone;
   // [calibration] baseline_rms_mm: the primary-channel residual RMS the calibration left on its
   // baseline recordings [mm]; 0 = not calibrated (DiagnoseOptions::baseline_rms_mm).
   double calibrated_baseline_rms_mm = 0.0;
+  // [calibration.baseline_rms]: the same residual RMS for each level channel [mm].
+  std::map<std::string, double> calibrated_baseline_rms_by_channel;
 
   const ExperimentSpec* find_experiment(const std::string& name) const;
 };

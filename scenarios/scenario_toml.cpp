@@ -241,15 +241,24 @@ namespace {
 // must look like one and carry a number.
 void read_calibration(TomlTable t, Scenario& s) {
   s.calibrated_baseline_rms_mm = t.number("baseline_rms_mm", 0.0, {0.0, 1.0e6}, "mm");
-  std::map<std::string, double>& out = s.calibrated_std;
-  if (t.has("std")) {
-    TomlTable st = t.table("std");
+  for (const auto& [table, out] : {std::pair{"std", &s.calibrated_std}, std::pair{"std_alone", &s.calibrated_std_alone}}) {
+    if (!t.has(table)) continue;
+    TomlTable st = t.table(table);
     for (const std::string& name : st.keys()) {
       const bool plausible = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
         return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.';
       });
       if (!plausible) st.fail(name, "expected a calibration parameter name (docs/calibration.md)");
-      out[name] = st.number(name, 0.0, {0.0, 1.0e6}, "(a standard deviation in the parameter's unit)");
+      (*out)[name] = st.number(name, 0.0, {0.0, 1.0e6}, "(a standard deviation in the parameter's unit)");
+    }
+  }
+  if (t.has("baseline_rms")) {
+    TomlTable rms = t.table("baseline_rms");
+    for (const std::string& channel : rms.keys()) {
+      if (channel.rfind("y_", 0) != 0 || channel.size() < 6 || channel.compare(channel.size() - 3, 3, "_mm") != 0) {
+        rms.fail(channel, "expected a level channel (y_up_mm, y_dw_mm, y_dwe_mm, y_checkN_mm)");
+      }
+      s.calibrated_baseline_rms_by_channel[channel] = rms.number(channel, 0.0, {0.0, 1.0e6}, "mm");
     }
   }
   t.reject_unknown_keys();

@@ -26,8 +26,7 @@ std::vector<Recording> record_op1_to_op4(const scenarios::Scenario& canal, const
     sensors.noise_std_mm = 0.05;
     sensors.seed = seed++;
     e.sensors = sensors;
-    diagnosis::conceal(effect, s, e, 0.0);
-    Recording r = scenarios::simulate(s, e);
+    Recording r = diagnosis::simulate_concealed(s, e, {effect}, 0.0);
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "scenarios/scenario_toml.hpp"
 #include "testing/cli_run.hpp"
 
 namespace {
@@ -148,6 +149,17 @@ TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
   EXPECT_NE(cal.find("offset_y_dwe_mm = ", table), std::string::npos) << cal;
   EXPECT_NE(cal.find("[calibration]"), std::string::npos) << cal;
   EXPECT_NE(cal.find("baseline_rms_mm = "), std::string::npos) << cal;
+  // With the other parameter held, a deviation can only shrink: σ_i / sqrt((R⁻¹)_ii), (R⁻¹)_ii ≥ 1.
+  const canalsim::scenarios::Scenario calibrated = canalsim::scenarios::parse_scenario(cal, "cal.toml");
+  ASSERT_EQ(calibrated.calibrated_std_alone.size(), calibrated.calibrated_std.size()) << cal;
+  for (const auto& [name, alone] : calibrated.calibrated_std_alone) {
+    EXPECT_LE(alone, calibrated.calibrated_std.at(name) * (1.0 + 1e-9)) << name;
+    EXPECT_GT(alone, 0.0) << name;
+  }
+  // The residual left per level channel; the primary's is the one in [calibration].
+  ASSERT_TRUE(calibrated.calibrated_baseline_rms_by_channel.count("y_dwe_mm")) << cal;
+  EXPECT_NEAR(calibrated.calibrated_baseline_rms_by_channel.at("y_dwe_mm"), calibrated.calibrated_baseline_rms_mm,
+              1e-5 * calibrated.calibrated_baseline_rms_mm);
 
   r = run_canalsim("diagnose --scenario cal.toml op3.csv --candidates sensor_offset --json d.json", scratch);
   EXPECT_EQ(r.code, 0) << r.err;
@@ -157,7 +169,7 @@ TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
   std::ofstream(scratch / "bad.toml") << cal << "cd_fre = 0.1\n";
   r = run_canalsim("diagnose --scenario bad.toml op3.csv --candidates sensor_offset", scratch);
   EXPECT_TRUE(is_one_error_line(r)) << r.err;
-  EXPECT_NE(r.err.find("bad.toml: calibration.std.cd_fre: not a calibration parameter of lab"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("bad.toml: calibration.std_alone.cd_fre: not a calibration parameter of lab"), std::string::npos) << r.err;
 
   r = run_canalsim("diagnose --scenario short.toml op3.csv --candidates sensor_offset --json b.json --baseline op3.csv", scratch);
   ASSERT_EQ(r.code, 0) << r.err;

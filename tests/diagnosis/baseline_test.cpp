@@ -47,11 +47,11 @@ std::vector<Recording> record(const std::vector<std::string>& experiments, const
     sensors.noise_std_mm = 0.05;
     sensors.seed = seed++;
     e.sensors = sensors;
-    for (const ConcealedEffect& effect : effects) conceal(effect, s, e, 0.0);
+
     scenarios::SimulateOptions so;
     so.settle_time = kSettle;
     so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
-    Recording r = scenarios::simulate(s, e, so);
+    Recording r = simulate_concealed(s, e, effects, 0.0, so);
     r.source = prefix + name + ".csv";
     out.push_back(std::move(r));
   }
@@ -60,7 +60,7 @@ std::vector<Recording> record(const std::vector<std::string>& experiments, const
 
 BaselineOptions fast_options() {
   BaselineOptions o;
-  o.diagnosis.candidates = {"sensor_delay", "sensor_offset", "discharge_coefficient", "downstream_gate", "friction"};
+  o.diagnosis.candidates = {"command_delay", "level_datum", "discharge_coefficient", "downstream_gate", "friction"};
   o.diagnosis.settle_time_s = kSettle;
   o.diagnosis.max_evaluations = 5;
   return o;
@@ -69,7 +69,7 @@ BaselineOptions fast_options() {
 TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFalseAlarm) {
   const std::vector<Recording> baseline = record({"op1", "op3"}, {}, 21, "base_");
   const std::vector<Recording> clean = record({"op2", "op4"}, {}, 31, "");
-  const std::vector<Recording> delayed = record({"op2", "op4"}, {{"sensor_delay", 1.0}}, 31, "");
+  const std::vector<Recording> delayed = record({"op2", "op4"}, {{"command_delay", 1.0}}, 31, "");
   const BaselineOptions o = fast_options();
 
   // Against the scenario as given, the parameter mismatch alone looks like a fault.
@@ -94,8 +94,8 @@ TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFa
   later.calibrated_std = deviations;
   const Diagnosis d = diagnose(r.calibration.calibrated, delayed, later);
   ASSERT_TRUE(d.ok) << d.message;
-  EXPECT_EQ(d.verdict, "sensor_delay") << d.reason;
-  EXPECT_LE(parameter_error({"sensor_delay", 1.0}, d.effects.front().parameter.value), 0.25);
+  EXPECT_EQ(d.verdict, "command_delay") << d.reason;
+  EXPECT_LE(parameter_error({"command_delay", 1.0}, d.effects.front().parameter.value), 0.25);
 }
 
 // Two effects at once in recordings the diagnosis' model did not make: a 2 mm leak under the head
@@ -110,7 +110,7 @@ TEST(Baseline, TwoEffectsConcealedInAnotherTruthAreBothNamedWithTheirJointParame
   const std::vector<ConcealedEffect> concealed = {{"gate_leakage", 2.0}, {"downstream_gate", -1.0}};
   const std::vector<Recording> recordings = record({"op1", "op2", "op3", "op4"}, concealed, 31, "");
   BaselineOptions o = fast_options();
-  o.diagnosis.candidates = {"gate_leakage", "downstream_gate", "discharge_coefficient", "sensor_offset", "friction"};
+  o.diagnosis.candidates = {"gate_leakage", "downstream_gate", "discharge_coefficient", "level_datum", "friction"};
   const BaselineDiagnosis r = diagnose_with_baseline(scenarios::builtin_scenario("lab"), baseline, recordings, o);
   ASSERT_TRUE(r.diagnosis.ok) << r.diagnosis.message;
   const auto& explanation = r.diagnosis.explanation;

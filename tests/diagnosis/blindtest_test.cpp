@@ -1,17 +1,18 @@
-// The blind benchmark's pieces: magnitudes in the issue's ranges, concealment, the error measure,
-// and a tiny end-to-end run.
+// The blind benchmark's pieces: magnitudes from the catalog's draws, the logger that makes
+// instrument faults, the error measure, and a tiny end-to-end run.
 #include "diagnosis/blindtest.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "scenarios/builtin.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
 
-TEST(Blindtest, DrawsMagnitudesInTheIssueRanges) {
+TEST(Blindtest, DrawsMagnitudesInTheCatalogRanges) {
   std::mt19937_64 rng(1);
   for (int k = 0; k < 200; ++k) {
     const double rate = draw_effect("gate_rate_limit", rng).value;
@@ -19,26 +20,74 @@ TEST(Blindtest, DrawsMagnitudesInTheIssueRanges) {
     const double cd = draw_effect("discharge_coefficient", rng).value;
     EXPECT_TRUE((cd >= 0.8 && cd <= 0.92) || (cd >= 1.08 && cd <= 1.2)) << cd;
     const double n = draw_effect("friction", rng).value;
-    EXPECT_TRUE(n == 0.5 || (n >= 2.0 && n <= 4.0)) << n;
-    const double off = std::abs(draw_effect("sensor_offset", rng).value);
-    EXPECT_TRUE(off >= 0.5 && off <= 3.0);
+    EXPECT_TRUE((n >= 0.25 && n <= 0.5) || (n >= 2.0 && n <= 4.0)) << n;
+    const ConcealedEffect off = draw_effect("sensor_offset", rng, {"y_up_mm", "y_dwe_mm"});
+    EXPECT_TRUE(std::abs(off.value) >= 0.5 && std::abs(off.value) <= 3.0);
+    EXPECT_TRUE(off.effect == "sensor_offset[y_up_mm]" || off.effect == "sensor_offset[y_dwe_mm]") << off.effect;
     const double lat = draw_effect("lateral_outflow", rng).value;
     EXPECT_TRUE(lat >= 0.03 && lat <= 0.15);
   }
 }
 
-TEST(Blindtest, SensorEffectsAreConcealedInTheSimulatorsOwnSensors) {
+// The logger writes each fault in its closed form on the faulty channel alone: a smooth ideal
+// recording (a sine, on which a cubic delay is exact to ~1e-4 mm) with no noise or lattice.
+TEST(Blindtest, TheLoggerFaultsOneChannelInItsClosedForm) {
+  const double h = 0.1, w = 2.0 * 3.141592653589793 / 20.0;
+  Recording ideal;
+  std::vector<double> t, u, x, up, dw, dwe;
+  for (int k = 0; k < 600; ++k) {
+    t.push_back(h * k);
+    u.push_back(k < 300 ? 20.0 : 25.0);
+    x.push_back(20.0 + std::sin(w * h * k));
+    up.push_back(60.0 + std::sin(w * h * k));
+    dw.push_back(48.0 + std::cos(w * h * k));
+    dwe.push_back(44.0 + std::sin(w * h * k));
+  }
+  for (const auto& [name, v] : {std::pair{"t_s", t}, {"u_mm", u}, {"x_up_mm", x}, {"y_up_mm", up}, {"y_dw_mm", dw},
+                                {"y_dwe_mm", dwe}}) {
+    ideal.set_column(name, v);
+  }
+  const Recording r = as_logged(ideal,
+                                {{"sensor_delay[y_dwe_mm]", 0.75}, {"sensor_drift[y_up_mm]", 0.6},
+                                 {"sensor_scale[y_dw_mm]", 1.05}, {"command_offset", 2.0}},
+                                {0.0, 0.0, 1});
+  for (int k = 20; k < 600; ++k) {
+    const double tk = h * k;
+    EXPECT_NEAR(r.column("y_dwe_mm")[k], 44.0 + std::sin(w * (tk - 0.75)), 2e-4) << k;
+    EXPECT_NEAR(r.column("y_up_mm")[k], up[k] + 0.6 * tk / 60.0, 1e-12) << k;
+    EXPECT_NEAR(r.column("y_dw_mm")[k], 1.05 * dw[k], 1e-12) << k;
+    EXPECT_NEAR(r.column("u_mm")[k], u[k] + 2.0, 1e-12) << k;  // logged 2 mm above the gate
+    EXPECT_DOUBLE_EQ(r.column("x_up_mm")[k], x[k]);
+  }
+  // A clock between the command and every reading shifts the gate position too; a coarse lattice
+  // of one sensor sits at an offset of its own.
+  const Recording late = as_logged(ideal, {{"command_delay", 0.5}, {"sensor_quantization[y_up_mm]", 0.4}}, {0.0, 0.05, 3});
+  EXPECT_NEAR(late.column("x_up_mm")[100], 20.0 + std::sin(w * (10.0 - 0.5)), 2e-4);
+  const double lattice = std::fmod(late.column("y_up_mm")[0], 0.4);
+  for (double v : late.column("y_up_mm")) EXPECT_NEAR(std::remainder(v - lattice, 0.4), 0.0, 1e-9);
+  for (double v : late.column("y_dwe_mm")) EXPECT_NEAR(std::remainder(v, 0.05), 0.0, 1e-9);
+}
+
+TEST(Blindtest, OnlyHydraulicEffectsAreConcealedInTheScenario) {
   scenarios::Scenario s = scenarios::builtin_scenario("lab");
-  scenarios::ExperimentSpec e = *s.find_experiment("op1");
-  conceal({"sensor_delay", 0.7}, s, e, 0.0);
-  ASSERT_TRUE(e.sensors);
-  EXPECT_DOUBLE_EQ(e.sensors->delay_s, 0.7);
-  conceal({"gate_leakage", 2.0}, s, e, 0.0);
+  const scenarios::Scenario lab = s;
+  conceal({"sensor_delay[y_dwe_mm]", 0.7}, s, 0.0);
+  conceal({"command_offset", 1.0}, s, 0.0);
+  EXPECT_EQ(s.head_gate->leakage_m, lab.head_gate->leakage_m);
+  conceal({"gate_leakage", 2.0}, s, 0.0);
   EXPECT_NEAR(s.head_gate->leakage_m, 0.002, 1e-15);
 }
 
+TEST(Blindtest, ATwinCountsOnlyWithoutAGatePosition) {
+  EXPECT_TRUE(names_effect("gate_leakage", "command_offset", false));
+  EXPECT_FALSE(names_effect("gate_leakage", "command_offset", true));
+  EXPECT_TRUE(names_effect("sensor_offset[y_up_mm]", "sensor_offset[y_up_mm]", true));
+  EXPECT_FALSE(names_effect("sensor_offset[y_dwe_mm]", "sensor_offset[y_up_mm]", false));
+}
+
 TEST(Blindtest, ParameterErrorIsRelativeToTheDepartureFromNoEffect) {
-  EXPECT_NEAR(parameter_error({"sensor_offset", 2.0}, 2.5), 0.25, 1e-12);
+  EXPECT_NEAR(parameter_error({"sensor_offset[y_dwe_mm]", 2.0}, 2.5), 0.25, 1e-12);
+  EXPECT_NEAR(parameter_error({"gate_rate_limit", 10.0}, 12.0), 0.2, 1e-12);
   // Cd 0.9 estimated 0.92: 0.02 of a 0.1 departure.
   EXPECT_NEAR(parameter_error({"discharge_coefficient", 0.9}, 0.92), 0.2, 1e-9);
   EXPECT_TRUE(std::isnan(parameter_error({"none", 0.0}, 1.0)));
@@ -58,16 +107,17 @@ TEST(Blindtest, ATinyRunScoresItsTrials) {
   ASSERT_EQ(r.trials.size(), 2u);
   EXPECT_EQ(r.effect_trials, 2);
   EXPECT_EQ(r.confusion.size(), 1u);
-  for (const auto& t : r.trials) EXPECT_EQ(t.truth.effect, "sensor_offset");
+  for (const auto& t : r.trials) EXPECT_EQ(t.truth.effect.rfind("sensor_offset[", 0), 0u) << t.truth.effect;
+  EXPECT_EQ(r.channel_trials, 2);
   EXPECT_NE(format_blindtest(r, o).find("top-1 accuracy"), std::string::npos);
   EXPECT_EQ(to_json(r)["trials"].size(), 2u);
 }
 
 // The realistic blind test end to end, small: a truth on twice the cells with the other limiter
 // and perturbed physics, a clean baseline of another PRBS calibrated on, then one trial with a
-// concealed sensor effect (a delay of 0.3–2 s or an offset of 0.5–3 mm) and one with two effects.
-// What it proves: the calibrated diagnosis names the effect in recordings its model did not make,
-// and the two-effect trial is scored on both names.
+// concealed fault of one level sensor (a delay of 0.3–2 s or an offset of 0.5–3 mm, either sign)
+// and one with two effects. What it proves: the calibrated diagnosis names the effect and its
+// channel in recordings its model did not make, and the two-effect trial is scored on both names.
 TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffect) {
   BlindtestOptions o;
   o.trials = 1;
@@ -89,6 +139,7 @@ TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffec
   EXPECT_NE(single.truth_drawn.find("cd_free"), std::string::npos);  // the truth was perturbed
   EXPECT_GT(single.calibration_seconds, 0.0);
   EXPECT_TRUE(single.correct) << single.truth.effect << " " << single.truth.value << " named " << single.verdict;
+  EXPECT_TRUE(single.channel_right);
   const Trial& two = r.trials[1];
   ASSERT_TRUE(two.second);
   EXPECT_NE(two.truth.effect, two.second->effect);

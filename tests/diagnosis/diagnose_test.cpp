@@ -43,8 +43,7 @@ std::vector<Recording> simulate_lab(const ConcealedEffect& truth) {
       steady.duration_s = 1.0;
       inflow = scenarios::simulate(lab, steady, so).column("q_lps").front() * 1e-3;
     }
-    conceal(truth, s, e, inflow);
-    Recording r = scenarios::simulate(s, e, so);
+    Recording r = simulate_concealed(s, e, {truth}, inflow, so);
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }
@@ -76,34 +75,55 @@ void expect_recovered(const Case& c) {
   const EffectResult* e = find(d, c.effect);
   ASSERT_NE(e, nullptr);
   EXPECT_LE(parameter_error({c.effect, c.value}, e->parameter.value), 0.25) << "estimate " << e->parameter.value;
-  if (c.effect == "sensor_quantization") {
+  if (c.effect == "sensor_quantization[y_dwe_mm]") {
     // Judged by the held-out lattice coherence, not by squared error (docs/diagnosis.md).
     EXPECT_GE(e->score, 0.9);
   } else {
-    EXPECT_GT(e->heldout_nrmse_after, e->heldout_nrmse_before);
+    EXPECT_TRUE(e->heldout_improves) << "worse on " << e->worsened;
+    // A fault of the primary sensor, or physics that moves every level, shows in its held-out Nrmse.
+    if (c.effect.find('[') == std::string::npos || c.effect.find("y_dwe_mm") != std::string::npos) {
+      EXPECT_GT(e->heldout_nrmse_after, e->heldout_nrmse_before);
+    }
   }
 }
 
 TEST(Diagnose, CleanRecordingsGiveNone) {
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), simulate_lab({"none", 0.0}),
-                               fast_options({"sensor_offset", "discharge_coefficient", "downstream_gate"}));
+                               fast_options({"level_datum", "discharge_coefficient", "downstream_gate"}));
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "none") << d.reason;
   EXPECT_EQ(d.effects.size(), 3u);
   EXPECT_EQ(d.series.size(), 2u);
 }
 
-TEST(Diagnose, RecoversSensorOffset) { expect_recovered({"sensor_offset", 1.5, {"downstream_gate"}}); }
-TEST(Diagnose, RecoversSensorDelay) { expect_recovered({"sensor_delay", 1.0, {"gate_rate_limit"}}); }
+TEST(Diagnose, RecoversSensorOffset) { expect_recovered({"level_datum", 1.5, {"downstream_gate"}}); }
+TEST(Diagnose, RecoversSensorDelay) { expect_recovered({"command_delay", 1.0, {"gate_rate_limit"}}); }
 // Levels that lead the command (loggers on two clocks): a negative delay.
-TEST(Diagnose, RecoversLevelsThatLeadTheCommand) { expect_recovered({"sensor_delay", -0.5, {"gate_rate_limit", "friction"}}); }
-TEST(Diagnose, RecoversSensorQuantization) { expect_recovered({"sensor_quantization", 0.5, {"sensor_offset"}}); }
-TEST(Diagnose, RecoversGateRateLimit) { expect_recovered({"gate_rate_limit", 8.0, {"sensor_delay"}}); }
+TEST(Diagnose, RecoversLevelsThatLeadTheCommand) { expect_recovered({"command_delay", -0.5, {"gate_rate_limit", "friction"}}); }
+TEST(Diagnose, RecoversSensorQuantization) { expect_recovered({"sensor_quantization[y_dwe_mm]", 0.5, {"level_datum"}}); }
+TEST(Diagnose, RecoversGateRateLimit) { expect_recovered({"gate_rate_limit", 8.0, {"command_delay"}}); }
 TEST(Diagnose, RecoversGateLeakage) { expect_recovered({"gate_leakage", 2.0, {"discharge_coefficient"}}); }
 TEST(Diagnose, RecoversDischargeCoefficient) { expect_recovered({"discharge_coefficient", 0.85, {"gate_leakage"}}); }
 TEST(Diagnose, RecoversFriction) { expect_recovered({"friction", 3.0, {"downstream_gate"}}); }
 TEST(Diagnose, RecoversLateralOutflow) { expect_recovered({"lateral_outflow", 0.1, {"discharge_coefficient"}}); }
-TEST(Diagnose, RecoversDownstreamGate) { expect_recovered({"downstream_gate", -1.5, {"sensor_offset"}}); }
+TEST(Diagnose, RecoversDownstreamGate) { expect_recovered({"downstream_gate", -1.5, {"level_datum"}}); }
+
+// Faults of one instrument: the healthy sensors contradict a fault of every sensor, so the
+// faulty channel is named.
+TEST(Diagnose, RecoversOneSensorsOffset) {
+  expect_recovered({"sensor_offset[y_dwe_mm]", -1.6, {"level_datum", "downstream_gate", "sensor_offset[y_dw_mm]"}});
+}
+TEST(Diagnose, RecoversOneSensorsDelay) {
+  expect_recovered({"sensor_delay[y_dwe_mm]", 1.0, {"command_delay", "gate_rate_limit", "sensor_delay[y_up_mm]"}});
+}
+TEST(Diagnose, RecoversAnUpstreamSensorsDrift) {
+  expect_recovered({"sensor_drift[y_up_mm]", 0.8, {"sensor_offset[y_up_mm]", "level_datum"}});
+}
+TEST(Diagnose, RecoversOneSensorsScale) {
+  expect_recovered({"sensor_scale[y_dw_mm]", 1.04, {"sensor_offset[y_dw_mm]", "level_datum"}});
+}
+// With the gate position logged, a command that reads high is told from a gate that leaks.
+TEST(Diagnose, RecoversACommandThatReadsHigh) { expect_recovered({"command_offset", 2.0, {"gate_leakage"}}); }
 
 TEST(Diagnose, ClockedCommandSwitchTimesAreReconstructed) {
   // A 0.5 s clock sampled every 0.13 s: the reconstructed instants are on the 0.5 s grid.

@@ -38,10 +38,9 @@ std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, con
     sensors.noise_std_mm = 0.05;
     sensors.seed = 17;
     e.sensors = sensors;
-    for (const auto& c : concealed) conceal(c, s, e, nominal_inflow_m3s(lab, e));
     scenarios::SimulateOptions so;
     so.settle_time = kSettle;
-    Recording r = scenarios::simulate(s, e, so);
+    Recording r = simulate_concealed(s, e, concealed, nominal_inflow_m3s(lab, e), so);
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }
@@ -76,13 +75,13 @@ const ExplainedEffect* expect_explained(const Diagnosis& d, const std::string& n
 }
 
 TEST(Explanation, NamesBothOfTwoConcealedEffectsWithJointlyRefittedParameters) {
-  const auto recordings = record({{"sensor_delay", 1.2}, {"discharge_coefficient", 0.86}}, {"op1", "op3"});
+  const auto recordings = record({{"command_delay", 1.2}, {"discharge_coefficient", 0.86}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"sensor_delay", "discharge_coefficient", "gate_leakage", "sensor_offset"}));
+                               options({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   ASSERT_GE(d.explanation.size(), 2u) << d.reason;
   EXPECT_EQ(d.explanation.front().name, d.verdict);  // the verdict stays the largest
-  const ExplainedEffect* delay = in_explanation(d, "sensor_delay");
+  const ExplainedEffect* delay = in_explanation(d, "command_delay");
   const ExplainedEffect* cd = in_explanation(d, "discharge_coefficient");
   ASSERT_NE(delay, nullptr);
   ASSERT_NE(cd, nullptr);
@@ -105,7 +104,7 @@ TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) 
   const auto recordings = record({{"gate_leakage", 2.5}, {"downstream_gate", -1.5}}, {"op1", "op2", "op3", "op4"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
                                options({"gate_leakage", "downstream_gate", "discharge_coefficient", "friction",
-                                        "lateral_outflow", "sensor_offset"}));
+                                        "lateral_outflow", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   // The diagnosis' own model is the truth here: the joint optimum is the truth itself.
   const ExplainedEffect* leak = expect_explained(d, "gate_leakage", 2.5, 0.05);
@@ -123,7 +122,7 @@ TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) 
 TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
   const auto recordings = record({{"gate_leakage", 2.5}, {"lateral_outflow", 0.08}}, {"op1", "op2", "op3", "op4"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"gate_leakage", "lateral_outflow", "downstream_gate", "sensor_offset"}));
+                               options({"gate_leakage", "lateral_outflow", "downstream_gate", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   expect_explained(d, "gate_leakage", 2.5, 0.1);
   expect_explained(d, "lateral_outflow", 0.08, 0.1);
@@ -137,7 +136,7 @@ TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
 TEST(Explanation, OneEffectIsExplainedByItselfAlone) {
   const auto recordings = record({{"discharge_coefficient", 0.86}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"sensor_delay", "discharge_coefficient", "gate_leakage", "sensor_offset"}));
+                               options({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "discharge_coefficient");
   ASSERT_EQ(d.explanation.size(), 1u) << d.explanation.back().name;
@@ -169,7 +168,7 @@ TEST(Explanation, LeakAndDischargeCoefficientAtOneOpeningAreAnAmbiguousPair) {
 TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
   const auto recordings = record({{"downstream_gate", 0.8}}, {"op1", "op3"}, 120.0);
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
-  DiagnoseOptions o = options({"downstream_gate", "sensor_offset"});
+  DiagnoseOptions o = options({"downstream_gate", "level_datum"});
   const Diagnosis uncalibrated = diagnose(lab, recordings, o);
   ASSERT_TRUE(uncalibrated.ok) << uncalibrated.message;
   EXPECT_EQ(uncalibrated.verdict, "downstream_gate");
@@ -191,19 +190,19 @@ TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
 // are named.
 TEST(Explanation, ALeakBesideAFreeDischargeCoefficientIsNotJudgedAgainstTheCoefficientsTolerance) {
   const auto recordings = record({{"discharge_coefficient", 0.85}, {"gate_leakage", 1.0}}, {"op1", "op2", "op3", "op4"});
-  DiagnoseOptions o = options({"discharge_coefficient", "gate_leakage", "downstream_gate", "sensor_offset"});
+  DiagnoseOptions o = options({"discharge_coefficient", "gate_leakage", "downstream_gate", "level_datum"});
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   o.calibrated_std = {{"cd_free", 0.02 * lab.head_gate->discharge_coefficient},
                       {"cd_submerged", 0.02 * lab.head_gate->submerged_coefficient()}};
-  ASSERT_GT(3.0 * calibration_uncertainty(Effect::gate_leakage, lab, o.calibrated_std, 32.0), 1.0);
+  ASSERT_GT(3.0 * calibration_uncertainty(*effect_from_name("gate_leakage"), lab, o.calibrated_std, 32.0), 1.0);
   const Diagnosis d = diagnose(lab, recordings, o);
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "discharge_coefficient") << d.reason;
   expect_explained(d, "discharge_coefficient", 0.85, 0.25 * 0.15 / 0.85);  // 25 % of the departure
   expect_explained(d, "gate_leakage", 1.0, 0.25);
-  EXPECT_TRUE(calibration_spanned_by(Effect::gate_leakage, Effect::discharge_coefficient));
-  EXPECT_FALSE(calibration_spanned_by(Effect::discharge_coefficient, Effect::gate_leakage));
-  EXPECT_FALSE(calibration_spanned_by(Effect::lateral_outflow, Effect::discharge_coefficient));
+  EXPECT_TRUE(calibration_spanned_by(*effect_from_name("gate_leakage"), *effect_from_name("discharge_coefficient")));
+  EXPECT_FALSE(calibration_spanned_by(*effect_from_name("discharge_coefficient"), *effect_from_name("gate_leakage")));
+  EXPECT_FALSE(calibration_spanned_by(*effect_from_name("lateral_outflow"), *effect_from_name("discharge_coefficient")));
 }
 
 TEST(CalibrationUncertainty, MapsCalibratedParametersOntoEffectUnits) {
@@ -213,15 +212,16 @@ TEST(CalibrationUncertainty, MapsCalibratedParametersOntoEffectUnits) {
   const std::map<std::string, double> sd = {{"cd_free", 0.01}, {"cd_submerged", 0.04}, {"manning_n", 0.0024},
                                             {"downstream_opening_mm", 0.3}, {"offset_mm", 0.03},
                                             {"offset_y_dwe_mm", 0.04}};
-  EXPECT_DOUBLE_EQ(calibration_uncertainty(Effect::discharge_coefficient, lab, sd, 20.0), 0.05);  // max(0.02, 0.05)
-  EXPECT_DOUBLE_EQ(calibration_uncertainty(Effect::gate_leakage, lab, sd, 20.0), 1.0);           // 0.05 × 20 mm
-  EXPECT_DOUBLE_EQ(calibration_uncertainty(Effect::friction, lab, sd, 20.0), 0.0024 / lab.pools[0].manning_n);
-  EXPECT_DOUBLE_EQ(calibration_uncertainty(Effect::downstream_gate, lab, sd, 20.0), 0.3);
-  EXPECT_NEAR(calibration_uncertainty(Effect::sensor_offset, lab, sd, 20.0), 0.05, 1e-15);  // hypot(0.03, 0.04)
-  EXPECT_EQ(calibration_uncertainty(Effect::gate_rate_limit, lab, sd, 20.0), 0.0);
-  EXPECT_EQ(calibration_uncertainty(Effect::downstream_gate, lab, {}, 20.0), 0.0);
-  EXPECT_NEAR(departure(Effect::friction, 2.0), std::log(2.0), 1e-15);
-  EXPECT_NEAR(departure(Effect::discharge_coefficient, 0.9), 0.1, 1e-15);
+  EXPECT_DOUBLE_EQ(calibration_uncertainty(*effect_from_name("discharge_coefficient"), lab, sd, 20.0), 0.05);  // max(0.02, 0.05)
+  EXPECT_DOUBLE_EQ(calibration_uncertainty(*effect_from_name("gate_leakage"), lab, sd, 20.0), 1.0);           // 0.05 × 20 mm
+  EXPECT_DOUBLE_EQ(calibration_uncertainty(*effect_from_name("friction"), lab, sd, 20.0), 0.0024 / lab.pools[0].manning_n);
+  EXPECT_DOUBLE_EQ(calibration_uncertainty(*effect_from_name("downstream_gate"), lab, sd, 20.0), 0.3);
+  EXPECT_NEAR(calibration_uncertainty(*effect_from_name("sensor_offset[y_dwe_mm]"), lab, sd, 20.0), 0.05, 1e-15);  // hypot(0.03, 0.04)
+  EXPECT_NEAR(calibration_uncertainty(*effect_from_name("level_datum"), lab, sd, 20.0), 0.03, 1e-15);
+  EXPECT_EQ(calibration_uncertainty(*effect_from_name("gate_rate_limit"), lab, sd, 20.0), 0.0);
+  EXPECT_EQ(calibration_uncertainty(*effect_from_name("downstream_gate"), lab, {}, 20.0), 0.0);
+  EXPECT_NEAR(departure(*effect_from_name("friction"), 2.0), std::log(2.0), 1e-15);
+  EXPECT_NEAR(departure(*effect_from_name("discharge_coefficient"), 0.9), 0.1, 1e-15);
 }
 
 }  // namespace

@@ -49,11 +49,10 @@ std::vector<Recording> truth_recordings(const std::vector<std::string>& experime
     sensors.noise_std_mm = 0.05;
     sensors.seed = 5;
     e.sensors = sensors;
-    conceal(kTruth, s, e, 0.0);
     scenarios::SimulateOptions so;
     so.settle_time = kSettle;
     so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
-    Recording r = scenarios::simulate(s, e, so);
+    Recording r = simulate_concealed(s, e, {kTruth}, 0.0, so);
     r.source = name + ".csv";
     // What a logger has: levels and the command (no flow or regime), the gate position if asked.
     Recording logged;

@@ -82,8 +82,8 @@ TEST(ModelDiagnosis, ACoarseLatticeIsNamedWhateverItsOffset) {
     const auto rec = testing::realistic_levels(synthetic_recording(liom(0.68, 1.71, 4.9), spec), sensors);
     const auto d = diagnose_model({rec}, options_for(ModelKind::liom, {"sensor_quantization", "gate_rate_limit"}));
     ASSERT_TRUE(d.ok) << d.message;
-    EXPECT_EQ(d.verdict, "sensor_quantization") << "origin " << origin << ": " << d.reason;
-    const auto& e = effect(d, "sensor_quantization");
+    EXPECT_EQ(d.verdict, "sensor_quantization[y_dwe_mm]") << "origin " << origin << ": " << d.reason;
+    const auto& e = effect(d, "sensor_quantization[y_dwe_mm]");
     EXPECT_NEAR(e.parameter.value, 0.3, 0.003) << "origin " << origin;
     // The expected reading on the found lattice does not make the held-out fit worse (measured:
     // +2.5 points through zero, -0.12 and -0.002 points through 0.11 and -0.23 mm).
@@ -141,9 +141,9 @@ TEST(ModelDiagnosis, EffectsAReducedModelCannotSeeAreListedWithTheReasonAndNever
   const auto rec = synthetic_recording(liom(0.68, 1.71, 4.9), two_periods());
   const auto d = diagnose_model({rec}, options_for(ModelKind::liom, {"sensor_delay", "friction"}));
   ASSERT_TRUE(d.ok) << d.message;
-  EXPECT_NE(d.verdict, "sensor_delay");
+  EXPECT_NE(d.verdict, "sensor_delay[y_dwe_mm]");
   EXPECT_NE(d.verdict, "friction");
-  EXPECT_NE(effect(d, "sensor_delay").note.find("delay L"), std::string::npos);
+  EXPECT_NE(effect(d, "sensor_delay[y_dwe_mm]").note.find("delay L"), std::string::npos);
 }
 
 TEST(ModelDiagnosis, BadOptionsAndUnknownEffectsAreOneLineErrors) {

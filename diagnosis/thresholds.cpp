@@ -1,0 +1,181 @@
+// What the recordings cannot show (pipeline.hpp step 7) in the scenario engine: for each candidate,
+// the smallest departure from "no effect" that these recordings would reveal.
+//
+// Let r0 be the residual the model (with the verdict, if any) leaves, and m the candidate's
+// signature: the change of the model's prediction per unit of θ, by one evaluation at the row's
+// probe step (a re-simulation for the canal's physics and the command, a re-observation for an
+// instrument). Recordings with the effect at δ would leave r0 + δ m against the model; fitting the
+// effect by least squares on the fitted parts (the engine's weights) finds δ̂ = δ + Σw r0·m / Σw m²
+// and leaves r0 − (Σw r0·m / Σw m²) m, whatever δ. Each term is a sum over channels of the
+// quadratics Σ r0², Σ r0·m, Σ m², so the pipeline's own rule — held-out score on the
+// channel-balanced cost, BIC gain with the correlated-sample count, materiality beyond the
+// calibration's tolerance, a held-out fit that improves — is evaluated at any δ in closed form,
+// and the threshold is the smallest δ on each side that passes it. Linear in θ: a first-order
+// picture, which the tests hold to "twice the threshold is named, half is not".
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/format.hpp"
+#include "diagnosis/calibrated.hpp"
+#include "diagnosis/scenario_engine.hpp"
+
+namespace canalsim::diagnosis::scenario_engine {
+
+// The quadratic sums of one channel over every recording, on the fitted and the held-out parts.
+struct ChannelSums {
+  double rr = 0.0, rm = 0.0, mm = 0.0;  // Σ r0², Σ r0·m, Σ m²
+  double n = 0.0;
+  // Mean square of r0 + x m.
+  double mse(double x) const { return n > 0.0 ? (rr + 2.0 * x * rm + x * x * mm) / n : 0.0; }
+};
+
+struct Engine::Signature {
+  bool ok = false;
+  double step = 0.0;                          // the probe step in θ
+  std::map<std::string, ChannelSums> fit, heldout;
+  std::vector<double> energy;                 // Σ w m² per recording (where the effect shows most)
+};
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The floor of a channel's reference in the balanced cost (Engine::balanced).
+double floor_of(const std::string& channel) { return channel == columns::discharge ? 0.003 : 0.03; }
+
+// mean_c MSE_c(x) / reference_c: the engine's channel-balanced cost of r0 + x m.
+double balanced_cost(const std::map<std::string, ChannelSums>& sums, double x, const std::map<std::string, double>& reference) {
+  double sum = 0.0;
+  int count = 0;
+  for (const auto& [c, s] : sums) {
+    if (s.n == 0.0) continue;
+    sum += s.mse(x) / reference.at(c);
+    ++count;
+  }
+  return count ? sum / count : 0.0;
+}
+
+}  // namespace
+
+Engine::Signature Engine::signature_of(const Effect& effect, const std::vector<Channels>& model,
+                                       const std::vector<Channels>& base) {
+  Signature sig;
+  const EffectKind& k = *effect.kind;
+  sig.step = k.theta_probe;
+  const std::vector<Channels> probed = predict({{effect, k.theta_none + sig.step}}, Readings::expected);
+  sig.energy.assign(recs_.size(), 0.0);
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    for (const auto& [c, y] : recs_[i].data) {
+      const auto mo = model[i].find(c), b = base[i].find(c), p = probed[i].find(c);
+      if (mo == model[i].end() || b == base[i].end() || p == probed[i].end()) continue;
+      const double w = weight_.at(c);
+      for (std::size_t n = 0; n < recs_[i].n; ++n) {
+        const double r0 = y[n] - mo->second[n];
+        const double m = -(p->second[n] - b->second[n]) / sig.step;  // r = data − model: the model rises by −m
+        ChannelSums& s = n < recs_[i].n_fit ? sig.fit[c] : sig.heldout[c];
+        s.rr += r0 * r0;
+        s.rm += r0 * m;
+        s.mm += m * m;
+        s.n += 1.0;
+        sig.energy[i] += w * m * m;
+      }
+    }
+  }
+  double wmm = 0.0;
+  for (const auto& [c, s] : sig.fit) wmm += weight_.at(c) * s.mm;
+  sig.ok = wmm > 0.0;
+  return sig;
+}
+
+// The threshold on each side: the smallest δ on a geometric grid from a tenth of the material
+// departure to the catalog's range at which recordings with the effect would pass the rule.
+DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& sig) const {
+  const EffectKind& k = *effect.kind;
+  DetectionThreshold t{effect.name(), k.parameter, k.unit, kNaN, kNaN};
+  if (!sig.ok) return t;
+  double wrm = 0.0, wmm = 0.0;
+  for (const auto& [c, s] : sig.fit) {
+    wrm += weight_.at(c) * s.rm;
+    wmm += weight_.at(c) * s.mm;
+  }
+  // r0 + δ m is what the model leaves of such recordings; the fit takes δ̂ m off: r0 − b m.
+  const double b = wrm / wmm;
+  const double n_eff = static_cast<double>(fit_samples_) / inflation_;
+  double opening = 0.0;
+  for (const auto& p : recs_) opening += p.operating_point_mm / static_cast<double>(recs_.size());
+  const double open = o_.calibrated_z * calibration_uncertainty(effect, base_, o_.calibrated_std, opening);
+  const auto passes = [&](double delta) {
+    // The balanced costs take the nominal model's residual of those recordings as reference.
+    std::map<std::string, double> ref_fit, ref_held;
+    for (const auto& [c, s] : sig.fit) ref_fit[c] = std::max(s.mse(delta), floor_of(c) * floor_of(c));
+    for (const auto& [c, s] : sig.heldout) ref_held[c] = std::max(s.mse(delta), floor_of(c) * floor_of(c));
+    const double held_before = balanced_cost(sig.heldout, delta, ref_held), held_after = balanced_cost(sig.heldout, -b, ref_held);
+    const double score = held_before > 0.0 ? (held_before - held_after) / held_before : 0.0;
+    const double bic = bic_change(n_eff, balanced_cost(sig.fit, delta, ref_fit), balanced_cost(sig.fit, -b, ref_fit));
+    const double estimate = to_parameter(effect, k.theta_none + delta - b);
+    const bool material = is_material(effect, estimate) && (open == 0.0 || departure(effect, estimate) > open);
+    // The held-out fit improves: on the primary channel, or on another level channel with the
+    // primary no worse (judge_by_channel).
+    const auto held = sig.heldout.find(o_.primary);
+    const bool primary_better = held != sig.heldout.end() && held->second.mse(-b) < held->second.mse(delta);
+    bool elsewhere = false;
+    for (const auto& [c, s] : sig.heldout) elsewhere = elsewhere || (c != o_.primary && calibration::is_level(c) && s.mse(-b) < 0.99 * s.mse(delta));
+    return material && score >= o_.min_score && -bic >= o_.min_bic_gain && (primary_better || elsewhere);
+  };
+  const double first = 0.1 * k.material, range = std::max(k.theta_high - k.theta_none, k.theta_none - k.theta_low);
+  for (const double side : {-1.0, 1.0}) {
+    const double room = side > 0.0 ? k.theta_high - k.theta_none : k.theta_none - k.theta_low;
+    if (room <= 0.0) continue;
+    for (double delta = first; delta <= std::min(room, range); delta *= 1.08) {
+      if (!passes(side * delta)) continue;
+      (side > 0.0 ? t.above : t.below) = to_parameter(effect, k.theta_none + side * delta);
+      break;
+    }
+  }
+  // In the inverse coordinate a larger θ is a slower gate: revealed at or below that speed.
+  if (k.coordinate == Coordinate::inverse) std::swap(t.below, t.above);
+  return t;
+}
+
+void Engine::detection_thresholds(const std::vector<std::string>& candidates, const std::string& verdict, Diagnosis& d) {
+  const std::vector<Channels>& model = prediction_with(verdict);
+  const std::vector<Channels> base = predict({}, Readings::expected);
+  double worst_ratio = 0.0;
+  std::vector<double> worst_energy;
+  std::string worst;
+  for (const auto& name : candidates) {
+    const Effect effect = *effect_from_name(name);
+    if (!unsupported_reason(effect, base_).empty()) continue;
+    const EffectKind& k = *effect.kind;
+    if (k.search == Search::lattice) {
+      // A lattice is seen in the levels themselves: any step at least twice the modelled resolution.
+      const double r = std::max(k.material, 2.0 * sensors_.resolution_mm);
+      d.thresholds.push_back({name, k.parameter, k.unit, kNaN, r});
+      continue;
+    }
+    const Signature sig = signature_of(effect, model, base);
+    const DetectionThreshold t = threshold_of(effect, sig);
+    // How far the threshold lies beyond the smallest change of interest, on the worse side.
+    double ratio = std::numeric_limits<double>::infinity();
+    for (const double side : {t.below, t.above}) {
+      if (std::isfinite(side)) ratio = std::min(ratio, std::abs(to_theta(effect, side) - k.theta_none) / k.material);
+    }
+    if (sig.ok && ratio > worst_ratio) {
+      worst_ratio = ratio;
+      worst = name;
+      worst_energy = sig.energy;
+    }
+    d.thresholds.push_back(t);
+  }
+  if (worst.empty() || worst_energy.empty()) return;
+  // The recording in which that effect shows most: recording longer there lowers its threshold
+  // (the score's noise falls with the square root of the samples).
+  const auto at = static_cast<std::size_t>(std::max_element(worst_energy.begin(), worst_energy.end()) - worst_energy.begin());
+  d.lowering_experiment = "the largest threshold is " + worst + "'s; it shows most in " + recs_[at].name +
+                          " (operating opening " + format_fixed(recs_[at].operating_point_mm, 1) +
+                          " mm): a longer recording at that operating point, or a sensor on the channel it acts on, "
+                          "lowers it";
+}
+
+}  // namespace canalsim::diagnosis::scenario_engine
