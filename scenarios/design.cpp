@@ -192,7 +192,8 @@ Scenario resolve_design(const Scenario& in) {
         throw InputError(s.source + ": pools[" + std::to_string(i) + "].offtakes[" + std::to_string(k) +
                          "].invert_m = " + format_value(o.invert_m) + ": expected it below the design level");
       }
-      o.coefficient = o.discharge_m3s / std::sqrt(head);
+      // An orifice's square root apart, as the solver evaluates it (solver/reach.cpp).
+      o.coefficient = o.discharge_m3s / (o.exponent == 0.5 ? std::sqrt(head) : std::pow(head, o.exponent));
     }
   }
   if (s.head_gate && s.head_gate->auto_opening) {

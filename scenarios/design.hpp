@@ -26,7 +26,7 @@
 // earlier version did, shifted each drowned check's head by half a cell's bed drop on each side;
 // with heads of a few centimetres that moved canal 2's levels by up to 3 cm.)
 //
-// Orifice offtakes: K = Q_design / sqrt(h_design − invert), with h_design the profile depth at the
+// Orifice offtakes: K = Q_design / (h_design − invert)^exponent, with h_design the profile depth at the
 // offtake's cell (at x = L, the target depth, for an offtake at the pool's end), so the outlet
 // delivers its design discharge at the design state.
 #pragma once

@@ -17,7 +17,7 @@ namespace canalsim::scenarios {
 
 enum class OfftakeKind {
   fixed,    // a fixed discharge, whatever the level
-  orifice,  // a gravity outlet: Q = K sqrt(h - invert), K sized to deliver discharge_m3s at design
+  orifice,  // a gravity outlet: Q = K (h - invert)^exponent, K sized to deliver discharge_m3s at design
 };
 
 // A lateral offtake: a discharge withdrawn from a pool in the cell containing x.
@@ -26,8 +26,12 @@ struct OfftakeSpec {
   double discharge_m3s = 0.0;   // withdrawn (fixed) or design (orifice) discharge, >= 0
   OfftakeKind kind = OfftakeKind::fixed;
   double invert_m = 0.0;        // orifice: invert height above the local bed
-  // orifice: K = Cd A sqrt(2 g) [m^2.5/s]; 0 until scenarios/design.hpp sizes it so that the
-  // outlet delivers discharge_m3s at the pool's design (steady, target-depth) level.
+  // orifice: the power of the head, in [0.5, 3]: 0.5 an orifice, 1.5 a side weir with its crest
+  // at the invert (solver/reach.hpp).
+  double exponent = 0.5;
+  // orifice: K [m^(3 - exponent)/s], Cd A sqrt(2 g) for an orifice; 0 until scenarios/design.hpp
+  // sizes it so that the outlet delivers discharge_m3s at the pool's design (steady, target-depth)
+  // level.
   double coefficient = 0.0;
 };
 

@@ -75,6 +75,7 @@ PoolSpec read_pool(TomlTable t) {
     off.discharge_m3s = o.required_number("discharge_m3s", {0.0, 1.0e4}, "m^3/s");
     off.kind = o.choice("kind", "fixed", {"fixed", "orifice"}) == "fixed" ? OfftakeKind::fixed : OfftakeKind::orifice;
     off.invert_m = o.number("invert_m", off.invert_m, {0.0, p.wall_height_m}, "m above the bed");
+    off.exponent = o.number("exponent", off.exponent, {0.5, 3.0}, "(power of the head)");
     if (off.kind == OfftakeKind::orifice && !(p.target_depth_m > off.invert_m)) {
       o.fail_value("kind", "\"orifice\"", "expected the pool to have a target_depth_m above the invert_m to size the orifice");
     }

@@ -81,8 +81,8 @@ std::vector<BuiltCanal::Offtake> apply_offtakes(solver::Reach& reach, const Pool
     BuiltCanal::Offtake h{offtake_cell(pool, off.x_m), offtake_at_end(pool, off.x_m), -1, off.discharge_m3s,
                           off.coefficient, off.discharge_m3s};
     if (off.kind == OfftakeKind::orifice) {
-      h.outlet = h.at_end ? reach.add_end_outlet(off.coefficient, off.invert_m)
-                          : reach.add_outlet(h.cell, off.coefficient, off.invert_m);
+      h.outlet = h.at_end ? reach.add_end_outlet(off.coefficient, off.invert_m, off.exponent)
+                          : reach.add_outlet(h.cell, off.coefficient, off.invert_m, off.exponent);
     } else if (h.at_end) {
       reach.fixed_end_withdrawal() += off.discharge_m3s;
     } else {

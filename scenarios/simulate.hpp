@@ -46,7 +46,7 @@ struct BuiltCanal {
     bool at_end = false;             // withdrawn at the pool's downstream end face (x_m = length)
     int outlet = -1;                 // index among the reach's outlets; -1 = fixed discharge
     double design_m3s = 0.0;         // the scenario's (design) discharge
-    double design_coefficient = 0.0; // orifice K at design [m^2.5/s]
+    double design_coefficient = 0.0; // orifice K at design [m^(3 - exponent)/s]
     double current_m3s = 0.0;        // fixed offtake: the discharge withdrawn now
   };
   std::vector<std::vector<Offtake>> offtakes;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace canalsim::solver {
 
@@ -33,14 +35,25 @@ double Reach::volume() const {
 
 namespace {
 
-double orifice_discharge(const Reach::Outlet& o, double depth) {
-  return o.coefficient * std::sqrt(std::max(depth - o.invert_depth, 0.0));
+// The outlet law of reach.hpp. The orifice's square root is kept apart from std::pow: it is exact
+// (correctly rounded), so orifice runs do not move with the library's pow.
+double outlet_law(const Reach::Outlet& o, double depth) {
+  const double head = std::max(depth - o.invert_depth, 0.0);
+  return o.coefficient * (o.exponent == 0.5 ? std::sqrt(head) : std::pow(head, o.exponent));
+}
+
+double valid_exponent(double exponent) {
+  if (!(exponent >= 0.5 && exponent <= 3.0)) {
+    throw std::invalid_argument("Reach outlet exponent = " + std::to_string(exponent) + ": expected a value in [0.5, 3]");
+  }
+  return exponent;
 }
 
 }  // namespace
 
-int Reach::add_outlet(int cell, double coefficient, double invert_depth) {
-  outlets_.push_back({std::clamp(cell, 0, cells_ - 1), std::max(coefficient, 0.0), invert_depth, 0.0});
+int Reach::add_outlet(int cell, double coefficient, double invert_depth, double exponent) {
+  outlets_.push_back({std::clamp(cell, 0, cells_ - 1), std::max(coefficient, 0.0), invert_depth,
+                      valid_exponent(exponent), 0.0});
   return static_cast<int>(outlets_.size()) - 1;
 }
 
@@ -48,21 +61,21 @@ void Reach::set_outlet_coefficient(int k, double coefficient) {
   outlets_.at(static_cast<std::size_t>(k)).coefficient = std::max(coefficient, 0.0);
 }
 
-int Reach::add_end_outlet(double coefficient, double invert_depth) {
-  outlets_.push_back({cells_ - 1, std::max(coefficient, 0.0), invert_depth, 0.0, true});
+int Reach::add_end_outlet(double coefficient, double invert_depth, double exponent) {
+  outlets_.push_back({cells_ - 1, std::max(coefficient, 0.0), invert_depth, valid_exponent(exponent), 0.0, true});
   return static_cast<int>(outlets_.size()) - 1;
 }
 
 double Reach::outlet_discharge(int k) const {
   const Outlet& o = outlets_.at(static_cast<std::size_t>(k));
-  return o.at_downstream_end ? o.applied : orifice_discharge(o, depth(o.cell));
+  return o.at_downstream_end ? o.applied : outlet_law(o, depth(o.cell));
 }
 
 double Reach::evaluate_end_withdrawal(double face_depth, double dry_depth) {
   double q = face_depth > dry_depth ? fixed_end_withdrawal_ : 0.0;
   for (Outlet& o : outlets_) {
     if (!o.at_downstream_end) continue;
-    o.applied = orifice_discharge(o, face_depth);
+    o.applied = outlet_law(o, face_depth);
     q += o.applied;
   }
   stage_end_withdrawal_ = q;
@@ -78,7 +91,7 @@ void Reach::update_outlets() {
   for (Outlet& o : outlets_) {
     if (o.at_downstream_end) continue;  // withdrawn at the face (Canal::compute_fluxes)
     const auto i = static_cast<std::size_t>(o.cell);
-    const double q = orifice_discharge(o, h_[i]);
+    const double q = outlet_law(o, h_[i]);
     lateral_inflow_[i] += (o.applied - q) / dx_;  // replaces the outlet's previous share
     o.applied = q;
   }

@@ -37,23 +37,27 @@ class Reach {
   std::vector<double>& lateral_inflow() { return lateral_inflow_; }
   const std::vector<double>& lateral_inflow() const { return lateral_inflow_; }
 
-  // Level-dependent lateral outlets (gravity orifices): outlet k withdraws
-  //   Q_k = K_k sqrt(max(h_cell - invert_k, 0))          [m³/s]
-  // from its cell, the orifice law Q = Cd A sqrt(2 g Δh) with the constant Cd A sqrt(2 g) = K_k
-  // (e.g. Henderson 1966, §6.2). The solver re-evaluates Q_k from each Runge–Kutta stage's depths
+  // Level-dependent lateral outlets: outlet k withdraws
+  //   Q_k = K_k max(h_cell - invert_k, 0)^p_k            [m³/s]
+  // from its cell. p = 1/2 is a gravity orifice, Q = Cd A sqrt(2 g Δh) with the constant
+  // Cd A sqrt(2 g) = K_k (e.g. Henderson 1966, §6.2); p = 3/2 a side weir of crest length L over
+  // the invert, K = (2/3) Cd L sqrt(2 g) (the rectangular weir formula), or a seepage that grows
+  // faster than the depth. The solver re-evaluates Q_k from each Runge–Kutta stage's depths
   // (update_outlets, called by the Canal), adding it to lateral_inflow() as −Q_k/dx on top of
   // what the caller put there, so steady-state solves and the volume balance see it.
   struct Outlet {
     int cell = 0;
-    double coefficient = 0.0;   // K [m^2.5/s], >= 0
+    double coefficient = 0.0;   // K [m^(3-p)/s], >= 0
     double invert_depth = 0.0;  // invert height above the cell's bed [m]
+    double exponent = 0.5;      // p: the power of the head, in [0.5, 3]
     double applied = 0.0;       // Q_k of the last evaluation [m³/s] (its share of lateral_inflow)
     bool at_downstream_end = false;  // withdraws at the end face (see end_withdrawal), not the cell
   };
-  int add_outlet(int cell, double coefficient, double invert_depth);  // returns the index
+  // Returns the index; the coefficient's unit is m^(3-p)/s.
+  int add_outlet(int cell, double coefficient, double invert_depth, double exponent = 0.5);
   // An outlet at the reach's downstream end face, just upstream of the boundary or link there;
   // its head is the face depth. Returns the index.
-  int add_end_outlet(double coefficient, double invert_depth);
+  int add_end_outlet(double coefficient, double invert_depth, double exponent = 0.5);
   const std::vector<Outlet>& outlets() const { return outlets_; }
   void set_outlet_coefficient(int k, double coefficient);
   // Q_k for the current state [m³/s]; for an end outlet, what the last flux evaluation withdrew.

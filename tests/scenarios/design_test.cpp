@@ -142,6 +142,11 @@ TEST(ResolveDesign, HeadGateOpeningPassesTheOfftakesFromTheSupplyLevel) {
   // The orifice sits at the pool's end (x_m = length_m): it delivers its design discharge at the
   // target depth there.
   EXPECT_NEAR(r.pools[0].offtakes[0].coefficient * std::sqrt(0.9), 0.5, 1e-12);
+  // A side weir (exponent 3/2) with its crest 0.3 m above the bed is sized on the same state:
+  // K 0.6^1.5 = 0.5 m³/s.
+  s.pools[0].offtakes[0].exponent = 1.5;
+  s.pools[0].offtakes[0].invert_m = 0.3;
+  EXPECT_NEAR(resolve_design(s).pools[0].offtakes[0].coefficient * std::pow(0.6, 1.5), 0.5, 1e-12);
 }
 
 }  // namespace

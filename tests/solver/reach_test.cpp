@@ -1,10 +1,12 @@
 // Level-dependent outlets of a reach (solver/reach.hpp): a closed rectangular tank drained by an
 // orifice Q = K sqrt(h) follows the closed form of Torricelli's draining,
 //   A_s dh/dt = −K sqrt(h)  ⇒  sqrt(h(t)) = sqrt(h0) − K t / (2 A_s),
-// and the volume balance books the outlet as lateral outflow.
+// a weir outlet Q = K h^(3/2) its own closed form, and the volume balance books the outlet as
+// lateral outflow.
 #include <cmath>
 #include <gtest/gtest.h>
 #include <memory>
+#include <stdexcept>
 
 #include "solver/canal.hpp"
 
@@ -39,6 +41,39 @@ TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
   const VolumeBalance b = canal.total_balance();
   EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
   EXPECT_LT(b.relative_error(), 1e-12);
+}
+
+// An outlet of exponent 3/2 (a side weir over its invert): A_s dh/dt = −K h^(3/2) integrates to
+//   h(t)^(-1/2) = h0^(-1/2) + K t / (2 A_s),
+// here 1 + 0.01 · 500 / 20 = 1.25 after 500 s, h = 0.64 m.
+TEST(Outlets, AWeirOutletDrainsAClosedTankAsItsClosedFormSays) {
+  Canal canal;
+  walled_tank(canal, {1.0, 0.0});
+  const double k = 0.01;  // m^1.5/s: 10 L/s at 1 m of head
+  EXPECT_EQ(canal.reach(0).add_outlet(9, k, 0.0, 1.5), 0);
+  ASSERT_TRUE(canal.advance_to(500.0));
+  const double expected_inverse_root = 1.0 + k * 500.0 / (2.0 * 10.0);
+  const double mean_depth = canal.reach(0).volume() / 10.0;
+  // As for the orifice, the outlet cell stands slightly below the mean.
+  EXPECT_NEAR(mean_depth, 1.0 / (expected_inverse_root * expected_inverse_root), 5e-4);
+  EXPECT_NEAR(canal.reach(0).outlet_discharge(0), k * std::pow(canal.reach(0).depth(9), 1.5), 1e-15);
+  const VolumeBalance b = canal.total_balance();
+  EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
+  EXPECT_LT(b.relative_error(), 1e-12);
+}
+
+// Below its invert an outlet passes nothing, whatever its exponent; exponents outside [1/2, 3]
+// are refused.
+TEST(Outlets, AWeirOutletBelowItsCrestIsDryAndBadExponentsAreRefused) {
+  Canal canal;
+  walled_tank(canal, {1.0, 0.0});
+  canal.reach(0).add_outlet(5, 0.05, 1.2, 1.5);  // crest 0.2 m above the 1 m pool
+  ASSERT_TRUE(canal.advance_to(30.0));
+  EXPECT_EQ(canal.reach(0).outlet_discharge(0), 0.0);
+  EXPECT_NEAR(canal.reach(0).volume(), 10.0, 1e-12);
+  EXPECT_THROW(canal.reach(0).add_outlet(5, 0.05, 0.0, 0.4), std::invalid_argument);
+  EXPECT_THROW(canal.reach(0).add_end_outlet(0.05, 0.0, 3.5), std::invalid_argument);
+  EXPECT_THROW(canal.reach(0).add_outlet(5, 0.05, 0.0, std::nan("")), std::invalid_argument);
 }
 
 TEST(Outlets, AChangedCoefficientTakesEffectAndZeroStopsTheOutlet) {
