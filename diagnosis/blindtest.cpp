@@ -13,6 +13,7 @@
 #include "core/format.hpp"
 #include "core/parallel.hpp"
 #include "diagnosis/blindtest_trial.hpp"
+#include "scenarios/outside_catalog.hpp"
 #include "scenarios/simulate.hpp"
 
 namespace canalsim::diagnosis {
@@ -27,6 +28,8 @@ std::string class_of(const std::string& name) { return name.substr(0, name.find(
 
 std::string short_name(const std::string& name) {
   if (name == "unexplained") return "unexpl";
+  if (name == "gate_backlash") return "backlash";
+  if (name == "depth_seepage") return "seepage";
   if (const EffectKind* k = kind_named(class_of(name))) return k->label;
   return name.substr(0, 7);
 }
@@ -35,6 +38,9 @@ std::vector<std::string> effect_names(const BlindtestOptions& o) {
   if (!o.effects.empty()) return o.effects;
   std::vector<std::string> out;
   for (const auto& e : catalog()) out.push_back(e.name);
+  if (o.realistic && o.realistic->outside_catalog) {
+    for (const auto& e : outside_catalog_effects()) out.push_back(e);
+  }
   return out;
 }
 
@@ -48,7 +54,9 @@ Status BlindtestOptions::validate() const {
   check.require(duration_s == 0.0 || duration_s >= 20.0, "duration_s", duration_s, "0 or >= 20");
   check.require(noise_std_mm >= 0.0, "noise_std_mm", noise_std_mm, ">= 0");
   for (const auto& e : effects) {
-    check.require(effect_from_name(e).has_value() || kind_named(e) != nullptr, "effects",
+    const bool outside = std::find(outside_catalog_effects().begin(), outside_catalog_effects().end(), e) !=
+                         outside_catalog_effects().end();
+    check.require(effect_from_name(e).has_value() || kind_named(e) != nullptr || outside, "effects",
                   "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
   check.nested("diagnose", diagnose.validate());
@@ -78,8 +86,15 @@ Status RealisticTruth::validate() const {
   return check.status();
 }
 
+const std::vector<std::string>& outside_catalog_effects() {
+  static const std::vector<std::string> names = {"gate_backlash", "depth_seepage"};
+  return names;
+}
+
 ConcealedEffect draw_effect(const std::string& name, std::mt19937_64& rng, const std::vector<std::string>& level_channels) {
   if (name == "none") return {"none", 0.0};
+  if (name == "gate_backlash") return {name, uniform(rng, 1.5, 4.0)};
+  if (name == "depth_seepage") return {name, uniform(rng, 0.06, 0.15)};
   Effect effect;
   if (const auto concrete = effect_from_name(name)) {
     effect = *concrete;
@@ -98,9 +113,9 @@ ConcealedEffect draw_effect(const std::string& name, std::mt19937_64& rng, const
 }
 
 void conceal(const ConcealedEffect& truth, scenarios::Scenario& s, double inflow_m3s) {
-  if (truth.effect == "none") return;
-  const Effect effect = *effect_from_name(truth.effect);
-  if (effect.kind->acts == Acts::hydraulics) apply_effect(effect, truth.value, s, inflow_m3s);
+  if (truth.effect == "depth_seepage") scenarios::add_depth_seepage(s, truth.value);
+  const auto effect = effect_from_name(truth.effect);
+  if (effect && effect->kind->acts == Acts::hydraulics) apply_effect(*effect, truth.value, s, inflow_m3s);
 }
 
 double parameter_error(const ConcealedEffect& truth, double estimate) {
@@ -225,6 +240,11 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     }
     result.confusion[index_of(class_of(t.truth.effect))][index_of(class_of(t.verdict))]++;
     result.correct += t.correct;
+    result.below_threshold += t.below_threshold;
+    if (!t.truth_location.empty()) {
+      ++result.outside_trials;
+      result.outside_located += t.correct;
+    }
     if (t.truth.effect.find('[') != std::string::npos) {
       ++result.channel_trials;
       result.channel_right += t.channel_right;
@@ -315,6 +335,16 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
                 100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.median_heldout_gain, r.min_heldout_gain,
                 r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;
+  if (r.below_threshold > 0) {
+    std::snprintf(buf, sizeof buf, "none below threshold    %d of the correct verdicts are `none` on an effect below its reported threshold\n",
+                  r.below_threshold);
+    s << buf;
+  }
+  if (r.outside_trials > 0) {
+    std::snprintf(buf, sizeof buf, "outside the catalog     %d/%d = %.1f%% located (unexplained residual on the right channel and regime)\n",
+                  r.outside_located, r.outside_trials, 100.0 * r.outside_located / r.outside_trials);
+    s << buf;
+  }
   if (r.channel_trials > 0) {
     std::snprintf(buf, sizeof buf, "faulty channel named    %d/%d = %.1f%% of the one-channel instrument faults\n",
                   r.channel_right, r.channel_trials, 100.0 * r.channel_right / r.channel_trials);
@@ -348,6 +378,11 @@ nlohmann::json to_json(const BlindtestResult& r) {
       trials.back()["both_named"] = t.both_named;
     }
     if (!t.truth_drawn.empty()) trials.back()["truth"] = t.truth_drawn;
+    if (!t.truth_location.empty()) {
+      trials.back()["truth_location"] = t.truth_location;
+      trials.back()["located"] = t.located;
+    }
+    trials.back()["below_threshold"] = t.below_threshold;
   }
   return json{{"classes", r.classes}, {"confusion", r.confusion}, {"accuracy", r.accuracy},
               {"effect_trials", r.effect_trials}, {"effect_correct", r.effect_correct},
@@ -357,7 +392,9 @@ nlohmann::json to_json(const BlindtestResult& r) {
               {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain}, {"median_heldout_gain", r.median_heldout_gain},
               {"min_heldout_gain", r.min_heldout_gain}, {"two_effect_trials", r.two_effect_trials},
               {"two_effect_both_named", r.two_effect_both}, {"channel_trials", r.channel_trials},
-              {"channel_right", r.channel_right}, {"seconds", r.seconds}, {"trials", trials}};
+              {"channel_right", r.channel_right}, {"below_threshold", r.below_threshold},
+              {"outside_trials", r.outside_trials}, {"outside_located", r.outside_located},
+              {"seconds", r.seconds}, {"trials", trials}};
 }
 
 }  // namespace canalsim::diagnosis

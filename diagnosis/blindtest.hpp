@@ -47,6 +47,10 @@ struct RealisticTruth {
   scenarios::UncertainTolerances tolerances;
   double noise_low_mm = 0.03, noise_high_mm = 0.1;  // level noise, drawn per trial
   int two_effect_trials = 10;                        // added to `trials`; >= 0
+  // Physics the catalog does not contain, drawn as classes beside the catalog's rows
+  // (outside_catalog_effects()); scored right when the diagnosis reports an unexplained residual
+  // located on the channel and in the flow regime where the effect changes the levels most.
+  bool outside_catalog = true;
   // The baseline runs each experiment with its PRBS seed plus this: other recordings than the
   // trial's, as a canal operator's baseline would be.
   std::uint64_t baseline_seed_offset = 1000;
@@ -64,7 +68,8 @@ struct BlindtestOptions {
   std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
   double duration_s = 0.0;          // 0 = each experiment's own duration; else >= 20 s
   double noise_std_mm = 0.05;       // level-sensor noise of the concealed recordings; >= 0
-  // Effects to draw from (empty = the whole catalog); `none` trials are added when include_none.
+  // Effects to draw from (empty = the whole catalog, and with `realistic` the physics outside it);
+  // `none` trials are added when include_none.
   std::vector<std::string> effects;
   bool include_none = true;
   DiagnoseOptions diagnose;         // its threads are set to 1: trials are the parallel unit
@@ -98,6 +103,9 @@ struct Trial {
   std::string truth_drawn;          // realistic: the perturbed physics of this trial's truth
   double estimate = 0.0;            // the diagnosis' parameter for the true effect's name
   bool channel_right = false;       // an instrument fault: the verdict acts on its channel
+  bool below_threshold = false;     // `none`, and the reported threshold does not reveal the drawn value
+  std::string truth_location;       // out of the catalog: "channel, regime" where it changes the levels most
+  std::string located;              // the diagnosis' unexplained residual: "channel, regime"
   double parameter_error = 0.0;     // relative (see docs/diagnosis.md); NaN without an effect
   double heldout_gain = 0.0;        // held-out Nrmse after − before of the verdict [points]
   bool correct = false;
@@ -111,6 +119,11 @@ struct BlindtestResult {
   std::vector<std::string> classes;           // row/column labels: none, effects..., and unexplained (column only)
   std::vector<std::vector<int>> confusion;    // [true class][verdict class]
   int correct = 0, effect_trials = 0, effect_correct = 0;
+  // Trials whose `none` verdict counts right because the diagnosis' own detection threshold for
+  // the concealed effect lies beyond the drawn value (Trial::below_threshold).
+  int below_threshold = 0;
+  // Out-of-catalog trials, and those located right (an unexplained residual on their channel and regime).
+  int outside_trials = 0, outside_located = 0;
   int clean_trials = 0, false_alarms = 0;
   double accuracy = 0.0, false_alarm_rate = 0.0;
   int within_25 = 0;                          // correct attributions with parameter error <= 25%
@@ -124,8 +137,14 @@ struct BlindtestResult {
   double seconds = 0.0, mean_trial_seconds = 0.0;
 };
 
-// A random magnitude for `effect` (a catalog row's name, or a concrete effect) from its row's
-// draw; a per-channel row without a channel is put on one of `level_channels`, drawn.
+// Physics the catalog does not contain (scenarios/outside_catalog.hpp), concealed by the realistic
+// blind test: gate_backlash (a play of 1.5–4 mm in the gate's drive) and depth_seepage (outlets
+// whose flow grows with the level to the power 3/2, 6–15 % of the inflow at op1's level).
+const std::vector<std::string>& outside_catalog_effects();
+
+// A random magnitude for `effect` (a catalog row's name, a concrete effect, or physics outside the
+// catalog) from its row's draw; a per-channel row without a channel is put on one of
+// `level_channels`, drawn.
 ConcealedEffect draw_effect(const std::string& effect, std::mt19937_64& rng,
                             const std::vector<std::string>& level_channels = {"y_up_mm", "y_dw_mm", "y_dwe_mm"});
 

@@ -70,6 +70,61 @@ std::vector<ConcealedEffect> concealed_of(const Trial& t) {
   return out;
 }
 
+bool outside_catalog(const std::string& effect) {
+  const auto& names = outside_catalog_effects();
+  return std::find(names.begin(), names.end(), effect) != names.end();
+}
+
+// The flow regime where a residual is largest ("" without a regime breakdown).
+std::string regime_of(const Mismatch& m) {
+  const GroupStat* top = nullptr;
+  for (const auto& g : m.by_regime) {
+    if (g.samples > 0 && (!top || g.rms > top->rms)) top = &g;
+  }
+  return top ? top->name : "";
+}
+
+// Where physics outside the catalog changes the truth's levels most: the level channel with the
+// largest RMS change over the experiments (noise-free runs with and without it), and on that
+// channel the flow regime (the truth's own) with the largest RMS change: "y_dw_mm, submerged".
+std::string truth_location(const TrialContext& c, const Scenario& truth, const ConcealedEffect& effect, const std::string& label) {
+  const std::vector<Recording> with = record(c, truth, {effect}, {0.0, 1, 0, false, label});
+  const std::vector<Recording> without = record(c, truth, {}, {0.0, 1, 0, false, label});
+  std::map<std::string, double> channel_sq;
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    for (const char* name : {columns::upstream_level, columns::level_below_gate, columns::level_downstream_end}) {
+      if (!with[i].has(name) || !without[i].has(name)) continue;
+      const auto& a = with[i].column(name);
+      const auto& b = without[i].column(name);
+      for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k) channel_sq[name] += (a[k] - b[k]) * (a[k] - b[k]);
+    }
+  }
+  if (channel_sq.empty()) return "";
+  const std::string channel =
+      std::max_element(channel_sq.begin(), channel_sq.end(), [](const auto& x, const auto& y) { return x.second < y.second; })->first;
+  std::map<std::string, std::pair<double, double>> regime_sq;  // name -> (sum of squares, samples)
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    if (!with[i].has(columns::regime)) continue;
+    const auto& a = with[i].column(channel);
+    const auto& b = without[i].column(channel);
+    const auto& regime = with[i].column(columns::regime);
+    for (std::size_t k = 0; k < std::min({a.size(), b.size(), regime.size()}); ++k) {
+      auto& slot = regime_sq[std::lround(regime[k]) == static_cast<long>(RegimeCode::free) ? "free" : "submerged"];
+      slot.first += (a[k] - b[k]) * (a[k] - b[k]);
+      slot.second += 1.0;
+    }
+  }
+  std::string regime;
+  double largest = -1.0;
+  for (const auto& [name, s] : regime_sq) {
+    if (s.second > 0.0 && s.first / s.second > largest) {
+      largest = s.first / s.second;
+      regime = name;
+    }
+  }
+  return channel + ", " + regime;
+}
+
 // The realistic trial (blindtest.hpp): a perturbed truth simulated differently, a clean baseline
 // of it calibrated on, the trial's recordings diagnosed against the calibrated scenario.
 Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
@@ -85,6 +140,7 @@ Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
   const std::vector<Recording> baseline =
       record(c, truth, {}, {noise, seed + 50, r.baseline_seed_offset, true, label + "/baseline"});
   const std::vector<Recording> recordings = record(c, truth, concealed_of(trial), {noise, seed, 0, true, label});
+  if (outside_catalog(trial.truth.effect)) trial.truth_location = truth_location(c, truth, trial.truth, label + "/location");
 
   trial.simulation_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   // The operator's workflow, the one `diagnose --baseline` runs (baseline.hpp).
@@ -98,8 +154,9 @@ Diagnosis diagnose_realistic(const TrialContext& c, Trial& trial) {
 Diagnosis diagnose_trial(const TrialContext& c, Trial& trial) {
   if (c.options.realistic) return diagnose_realistic(c, trial);
   const std::uint64_t seed = c.options.seed * 1000003ULL + static_cast<std::uint64_t>(trial.index) * 101ULL;
-  const std::vector<Recording> recordings =
-      record(c, c.base, concealed_of(trial), {c.options.noise_std_mm, seed, 0, false, "trial" + std::to_string(trial.index)});
+  const std::string label = "trial" + std::to_string(trial.index);
+  const std::vector<Recording> recordings = record(c, c.base, concealed_of(trial), {c.options.noise_std_mm, seed, 0, false, label});
+  if (outside_catalog(trial.truth.effect)) trial.truth_location = truth_location(c, c.base, trial.truth, label + "/location");
   return c.options.model ? diagnose_model(recordings, *c.options.model) : diagnose(c.base, recordings, c.diagnose);
 }
 
@@ -114,6 +171,17 @@ void run_trial(const TrialContext& c, Trial& trial) {
   // Realistic recordings hold no gate position: a twin of the concealed effect is as right.
   const bool gate_position = !c.options.realistic;
   trial.correct = names_effect(trial.verdict, trial.truth.effect, gate_position);
+  // Physics outside the catalog: right when the unexplained residual is located where it acts.
+  if (outside_catalog(trial.truth.effect)) {
+    trial.located = d.unexplained ? d.unexplained->channel + ", " + regime_of(d.unexplained->where) : "";
+    trial.correct = !trial.truth_location.empty() && trial.located == trial.truth_location;
+  }
+  // `none` on an effect the diagnosis says these recordings could not reveal is an honest answer.
+  if (!trial.correct && trial.verdict == "none" && trial.truth.effect != "none" && !trial.second) {
+    for (const auto& t : d.thresholds) {
+      if (t.effect == trial.truth.effect && !t.reveals(trial.truth.value)) trial.correct = trial.below_threshold = true;
+    }
+  }
   const auto channel_of = [](const std::string& name) {
     const auto open = name.find('[');
     return open == std::string::npos ? std::string() : name.substr(open);

@@ -454,6 +454,11 @@ std::vector<RecordingResiduals> Engine::residuals_with(const std::string& effect
     r.u = p.u;
     r.level = p.data.at(o_.primary);
     r.regime = p.regime;
+    if (r.regime.empty() && nominal_[i].count(columns::regime)) {
+      r.regime = nominal_[i].at(columns::regime);
+      for (double& code : r.regime) code = std::round(code);
+    }
+    r.fit_samples = p.n_fit;
     r.primary = o_.primary;
     for (const auto& [c, y] : p.data) {
       const auto it = model[i].find(c);

@@ -37,7 +37,8 @@ struct RecordingResiduals {
   double period_s = 0.13;
   std::vector<double> t, u;           // time [s], gate command [mm]
   std::vector<double> level;          // recorded primary channel [mm]
-  std::vector<double> regime;         // RegimeCode values, or empty
+  std::vector<double> regime;         // RegimeCode values (recorded, else modelled), or empty
+  std::size_t fit_samples = 0;        // leading samples the explanation fitted (0 = half)
   std::string primary;                // the channel whose residual is located in time/frequency
   std::map<std::string, std::vector<double>> residuals;  // channel -> data - model
   std::map<std::string, std::vector<double>> recorded;   // level channel -> recorded series (noise estimates)

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "diagnosis/blindtest.hpp"
+#include "scenarios/outside_catalog.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
@@ -59,8 +60,9 @@ Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& 
   SensorModel faults;
   std::vector<std::pair<Effect, double>> command_faults;
   for (const ConcealedEffect& c : concealed) {
-    if (c.effect == "none") continue;
-    const Effect effect = *effect_from_name(c.effect);
+    const auto found = effect_from_name(c.effect);
+    if (!found) continue;  // none, or physics outside the catalog (made by the simulation)
+    const Effect& effect = *found;
     if (effect.kind->acts == Acts::readings) apply_effect(effect, c.value, faults);
     if (effect.kind->acts == Acts::command) command_faults.emplace_back(effect, c.value);
   }
@@ -107,8 +109,14 @@ Recording simulate_concealed(const scenarios::Scenario& scenario, scenarios::Exp
   sensors.noise_std_mm = 0.0;
   sensors.resolution_mm = 0.0;
   e.sensors = sensors;
-  for (const ConcealedEffect& effect : concealed) conceal(effect, s, inflow_m3s);
-  return as_logged(scenarios::simulate(s, e, options), concealed, logger);
+  double backlash_mm = 0.0;
+  for (const ConcealedEffect& effect : concealed) {
+    conceal(effect, s, inflow_m3s);
+    if (effect.effect == "gate_backlash") backlash_mm = effect.value;
+  }
+  const Recording ideal = backlash_mm > 0.0 ? scenarios::simulate_with_backlash(s, e, backlash_mm, options)
+                                            : scenarios::simulate(s, e, options);
+  return as_logged(ideal, concealed, logger);
 }
 
 }  // namespace canalsim::diagnosis

@@ -15,10 +15,44 @@ namespace canalsim::diagnosis {
 
 namespace {
 
+// The own score above which an effect that needs no re-simulation joins the explanation step.
+constexpr double kReadingEffectScore = 0.02;
+
 std::vector<ResidualTests> tests_of(const std::vector<RecordingResiduals>& sets, const ResidualTestOptions& o) {
   std::vector<ResidualTests> out;
   for (const auto& r : sets) out.push_back(residual_tests(r.residuals.at(r.primary), r.u, o));
   return out;
+}
+
+// Held-out scores within this share of the best are a tie: the recordings cannot prefer one
+// effect to the other (an offset and a scale error of y_up_mm, which a PID-held reservoir keeps
+// within a fraction of a millimetre, differ by 1e-4 of the score; on y_dw_mm, whose level differs
+// by 16 mm between op1 and op3, a 4 % scale error beats the offset by 2 %).
+constexpr double kTiedShare = 0.002;
+
+// The catalog row of an effect name (its position in the table; past the end for the names of
+// another engine's effects).
+std::size_t row_of(const std::string& name) {
+  const std::string kind = name.substr(0, name.find('['));
+  const auto& rows = catalog();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (kind == rows[i].name) return i;
+  }
+  return rows.size();
+}
+
+// Among significant effects tied with the best (kTiedShare), the one listed first in the catalog
+// leads: the table lists the plainer explanation first (an offset before a scale error on a
+// sensor whose level hardly moves, a leak before a command that reads high). The tie itself is
+// reported as an ambiguous pair (step 5).
+void prefer_the_plainer_of_a_tie(std::vector<EffectResult>& effects) {
+  if (effects.empty() || !effects.front().significant) return;
+  std::size_t lead = 0;
+  for (std::size_t i = 1; i < effects.size() && effects[i].significant; ++i) {
+    if (effects.front().score - effects[i].score > kTiedShare * std::abs(effects.front().score)) break;
+    if (row_of(effects[i].name) < row_of(effects[lead].name)) lead = i;
+  }
+  std::rotate(effects.begin(), effects.begin() + static_cast<std::ptrdiff_t>(lead), effects.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
 }
 
 // Step 5 of the pipeline (header): adds to the verdict, while one is significant, the remaining
@@ -28,12 +62,16 @@ void explain_with_several(Explainer& explainer, const PipelineSettings& settings
                           const std::function<void(const std::string&)>& progress) {
   const EffectResult& verdict = d.effects.front();
   d.explanation.push_back({verdict.name, verdict.parameter, verdict.score, verdict.score});
-  // Every candidate the model can carry is tried, whatever its own score: an effect that
-  // counteracts the verdict's (an outflow beside a leak) has none — fitted alone it sits at its
-  // bound — and shows only in a joint fit.
+  // Every candidate the model can carry and that re-simulates the canal is tried, whatever its
+  // own score: an effect of the hydraulics that counteracts the verdict's (an outflow beside a
+  // leak) has none — fitted alone it sits at its bound — and shows only in a joint fit. An effect
+  // of the readings alone (no re-simulation) is tried when it explains something by itself: a
+  // sensor's fault does not hide behind the canal's physics, and a joint fit with a re-simulated
+  // verdict costs a simulation per iteration.
   std::vector<std::string> remaining;
   for (std::size_t i = 1; i < d.effects.size(); ++i) {
-    if (d.effects[i].note.empty()) remaining.push_back(d.effects[i].name);
+    const EffectResult& e = d.effects[i];
+    if (e.note.empty() && (e.simulations > 0 || e.score > kReadingEffectScore)) remaining.push_back(e.name);
   }
   std::map<std::string, JointExplanation> with_verdict;
   while (static_cast<int>(d.explanation.size()) < settings.max_effects && !remaining.empty()) {
@@ -67,6 +105,90 @@ void explain_with_several(Explainer& explainer, const PipelineSettings& settings
   }
 }
 
+// The level channel furthest beyond what is ordinary for it (the primary when none is).
+std::string furthest_channel(const Diagnosis& d, double none_noise_factor) {
+  std::string out = d.channels.empty() ? "" : d.channels.front().name;
+  double worst = 0.0;
+  for (const auto& c : d.channels) {
+    const double excess = c.rms / std::max({none_noise_factor * c.noise, c.tolerated, 1e-12});
+    if (!c.ordinary && excess > worst) {
+      worst = excess;
+      out = c.name;
+    }
+  }
+  return out;
+}
+
+std::string largest_group(const std::vector<GroupStat>& groups, const char* what) {
+  if (groups.size() < 2) return "";
+  const auto top = std::max_element(groups.begin(), groups.end(), [](const GroupStat& a, const GroupStat& b) { return a.rms < b.rms; });
+  std::string out = std::string("largest ") + what + " " + top->name + " (RMS " + format_fixed(top->rms, 3) + " mm";
+  for (const auto& g : groups) {
+    if (&g != &*top) out += "; " + g.name + " " + format_fixed(g.rms, 3) + " mm";
+  }
+  return out + ")";
+}
+
+std::string describe_discrepancy(const DiscrepancyModel& m) {
+  if (m.found) {
+    return "a " + m.form + " discrepancy model (" + std::to_string(m.poles) + " pole(s), static gain " +
+           format_g(m.static_gain, 3) + " mm per mm of command, delay " + format_fixed(m.delay_s, 2) + " s, band " +
+           format_fixed(m.band_low_hz, 3) + "-" + format_fixed(m.band_high_hz, 3) + " Hz) removes " +
+           format_fixed(100.0 * m.heldout_share_removed, 0) + " % of the held-out residual";
+  }
+  if (m.form == "static") {
+    return "a constant per operating point removes " + format_fixed(100.0 * m.offsets_share_removed, 0) +
+           " % of the held-out residual: a static error that does not follow the command";
+  }
+  return "no low-order filter from the command explains it: it does not follow the command (a drift, a disturbance)";
+}
+
+// Where an unexplained residual lives, and a discrepancy model for every level channel.
+UnexplainedResidual locate_unexplained(const std::vector<RecordingResiduals>& sets, const Diagnosis& d,
+                                       const PipelineSettings& settings) {
+  UnexplainedResidual u;
+  u.channel = furthest_channel(d, settings.none_noise_factor);
+  std::vector<RecordingResiduals> on = sets;
+  for (auto& r : on) {
+    if (const auto it = r.recorded.find(u.channel); it != r.recorded.end()) r.level = it->second;
+    if (r.residuals.count(u.channel)) r.primary = u.channel;
+  }
+  u.where = locate(on, settings.locate);
+  for (const auto& c : d.channels) {
+    std::vector<DiscrepancyRecording> records;
+    for (const auto& r : sets) {
+      const auto e = r.residuals.find(c.name);
+      if (e == r.residuals.end() || r.u.size() != e->second.size() || e->second.size() < 8) continue;
+      const std::size_t n_fit = r.fit_samples > 0 && r.fit_samples < e->second.size() ? r.fit_samples : e->second.size() / 2;
+      records.push_back({r.u, e->second, n_fit});
+    }
+    if (!records.empty()) u.discrepancy.push_back(fit_discrepancy(c.name, records, sets.front().period_s));
+  }
+  // In words.
+  std::string text = "on " + u.channel;
+  for (const auto& c : d.channels) {
+    if (c.name == u.channel) text += " (RMS " + format_fixed(c.rms, 3) + " mm, noise " + format_fixed(c.noise, 3) + " mm)";
+  }
+  if (const std::string regime = largest_group(u.where.by_regime, "in"); !regime.empty()) text += "; " + regime;
+  if (!u.where.by_recording.empty()) {
+    const auto top = std::max_element(u.where.by_recording.begin(), u.where.by_recording.end(),
+                                      [](const RecordingStat& a, const RecordingStat& b) { return a.rms < b.rms; });
+    text += "; largest in " + top->name + " (operating opening " + format_fixed(top->operating_point_mm, 1) + " mm, RMS " +
+            format_fixed(top->rms, 3) + " mm)";
+  }
+  if (!u.where.windows.empty()) {
+    const MismatchWindow& w = u.where.windows.front();
+    text += "; worst window " + w.recording + " " + format_fixed(w.start_s, 1) + "-" + format_fixed(w.end_s, 1) + " s";
+    for (const auto& e : w.events) text += " " + e;
+  }
+  if (u.where.band.found) text += "; band " + format_fixed(u.where.band.low_hz, 3) + "-" + format_fixed(u.where.band.high_hz, 3) + " Hz";
+  for (const auto& m : u.discrepancy) {
+    if (m.channel == u.channel) text += "; " + describe_discrepancy(m);
+  }
+  u.summary = text;
+  return u;
+}
+
 }  // namespace
 
 Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& candidates,
@@ -93,12 +215,24 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
       if (a.note.empty() != b.note.empty()) return a.note.empty();
       return a.score > b.score;
     });
+    prefer_the_plainer_of_a_tie(d.effects);
     const std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
     if (!corrected.empty()) {
       explain_with_several(explainer, settings, d,
                            [&](const std::string& candidate) { progress(0.95, "explanation: " + candidate); });
     }
+    if (d.verdict == "unexplained") d.unexplained = locate_unexplained(before, d, settings);
     const auto after = explainer.residuals_with(corrected);
+    if (!corrected.empty()) {
+      // What the explanation leaves: when a level channel is still beyond its noise and the
+      // calibration's tolerance, the rest is located as an unexplained residual (partly explained).
+      Diagnosis left;
+      set_noise_figures(after, explainer.sensor_resolution(), settings, left);
+      if (std::any_of(left.channels.begin(), left.channels.end(), [](const ChannelFigures& c) { return !c.ordinary; })) {
+        d.unexplained = locate_unexplained(after, left, settings);
+        d.unexplained->summary = "left after " + corrected + " " + d.unexplained->summary;
+      }
+    }
     d.mismatch_after = locate(after, settings.locate);
     d.tests_after = tests_of(after, settings.tests);
     d.series = explainer.series_with(corrected);

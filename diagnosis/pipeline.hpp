@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "core/progress.hpp"
+#include "diagnosis/discrepancy.hpp"
 #include "diagnosis/locate.hpp"
 #include "diagnosis/residual_tests.hpp"
 
@@ -116,6 +117,16 @@ struct RecordingSeries {
   std::size_t fit_samples = 0;
 };
 
+// Where an unexplained residual lives, and what a data-driven correction makes of it.
+struct UnexplainedResidual {
+  std::string channel;           // the level channel furthest beyond its noise and tolerance
+  Mismatch where;                // that channel's residual located (locate.hpp)
+  // A low-order filter from the command to each level channel's residual (discrepancy.hpp): a
+  // description of the missing physics, not physics.
+  std::vector<DiscrepancyModel> discrepancy;
+  std::string summary;           // in words: channel, regime, operating point, windows, band, form
+};
+
 struct Diagnosis {
   bool ok = true;
   std::string message;           // numerical failure (a simulation that did not run), when !ok
@@ -132,6 +143,9 @@ struct Diagnosis {
   double nominal_rms = 0.0;      // primary residual RMS of the nominal model [mm]
   std::vector<ChannelFigures> channels;  // every level channel, the primary first
   std::vector<DetectionThreshold> thresholds;  // per candidate the engine can judge so
+  // With the verdict `unexplained`; with an effect, what the model with it still leaves beyond
+  // the noise and the calibration's tolerance on some level channel (a partial explanation).
+  std::optional<UnexplainedResidual> unexplained;
   std::string lowering_experiment;   // the experiment that would lower the largest thresholds
   std::vector<RecordingSeries> series;
   std::map<std::string, double> channel_scale;  // s_c of the cost weights

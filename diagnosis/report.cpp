@@ -203,6 +203,21 @@ json to_json(const Diagnosis& d) {
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
            {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
            {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
+  if (d.unexplained) {
+    json models = json::array();
+    for (const auto& m : d.unexplained->discrepancy) {
+      models.push_back({{"channel", m.channel}, {"found", m.found}, {"form", m.form}, {"poles", m.poles},
+                        {"numerator", m.numerator}, {"delay_s", number(m.delay_s)}, {"static_gain", number(m.static_gain)},
+                        {"a", m.a}, {"b", m.b}, {"offsets_mm", m.offsets}, {"peak_hz", number(m.peak_hz)},
+                        {"band_hz", {number(m.band_low_hz), number(m.band_high_hz)}},
+                        {"heldout_rms_before_mm", number(m.heldout_rms_before)},
+                        {"heldout_rms_after_mm", number(m.heldout_rms_after)},
+                        {"heldout_share_removed", number(m.heldout_share_removed)},
+                        {"offsets_share_removed", number(m.offsets_share_removed)}});
+    }
+    out["unexplained"] = {{"channel", d.unexplained->channel}, {"summary", d.unexplained->summary},
+                          {"where", mismatch_json(d.unexplained->where)}, {"discrepancy_models", models}};
+  }
   if (!d.ok) out["message"] = d.message;
   return out;
 }
@@ -235,6 +250,7 @@ std::string text_summary(const Diagnosis& d) {
       << (c.tolerated > 0.0 ? ", tolerated " + fixed(c.tolerated, 3) + " mm" : std::string())
       << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
   }
+  if (d.unexplained) s << "where the unexplained residual lives: " << d.unexplained->summary << '\n';
   if (!d.thresholds.empty()) {
     s << "detection thresholds (what these recordings would reveal):\n";
     for (const auto& t : d.thresholds) s << "  " << t.effect << ": " << threshold_text(t) << '\n';
@@ -300,6 +316,10 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
     return s.str();
   }
   s << "<h2>Verdict: " << html::escape(d.verdict) << "</h2><p>" << html::escape(d.reason) << ".</p>";
+  if (d.unexplained) {
+    s << "<p>Where the unexplained residual lives: " << html::escape(d.unexplained->summary)
+      << ". The discrepancy model describes the residual; it is not physics.</p>";
+  }
   s << "<p>Measurement noise " << fixed(d.noise) << " mm; nominal residual RMS " << fixed(d.nominal_rms)
     << " mm; a perfect model would reach Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%.</p>";
   s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>parameter</th><th>Nrmse fitted</th>"

@@ -124,6 +124,21 @@ fs::path short_lab_recording(const fs::path& scratch) {
   return scratch / "op3.csv";
 }
 
+// A fault named on a channel the recordings do not carry, or on one that is no level, is one line
+// naming the candidate and the channels there are; nothing is written.
+TEST(Diagnose, AChannelTheRecordingsLackIsOneErrorLine) {
+  const fs::path scratch = scratch_dir("diagnose_missing_channel");
+  short_lab_recording(scratch);
+  RunResult r = run_canalsim("diagnose --scenario short.toml op3.csv --candidates sensor_offset[y_check2_mm] --json d.json", scratch);
+  EXPECT_TRUE(is_one_error_line(r)) << r.err;
+  EXPECT_NE(r.err.find("sensor_offset[y_check2_mm] names channel y_check2_mm"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("y_dwe_mm, y_dw_mm, y_up_mm"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch / "d.json"));
+  r = run_canalsim("diagnose --scenario short.toml op3.csv --candidates sensor_offset[q_lps]", scratch);
+  EXPECT_TRUE(is_one_error_line(r)) << r.err;
+  EXPECT_NE(r.err.find("unknown effect 'sensor_offset[q_lps]'"), std::string::npos) << r.err;
+}
+
 TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
   const fs::path scratch = scratch_dir("diagnose_baseline_ok");
   short_lab_recording(scratch);
