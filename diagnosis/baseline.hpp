@@ -1,4 +1,4 @@
-// Diagnosis against a calibrated baseline (issue 13): the workflow of a canal operator, who
+// Diagnosis against a calibrated baseline: the workflow of a canal operator, who
 // calibrates the scenario once on clean baseline recordings and then diagnoses later recordings
 // against the calibrated scenario.
 //

@@ -4,7 +4,8 @@
 //      controlled gate) with ideal sensors; the scenario's own sensor model (resolution, delay,
 //      offset) is applied to the sampled true levels. Residuals = recording − model per channel.
 //   2. Locate (locate.hpp) and test the residuals (residual_tests.hpp).
-//   3. Explain: every catalog effect (catalog.hpp) is fitted, one parameter each, on the first
+//   3. Explain: every catalog effect (catalog.hpp; an instrument's fault on each level channel the
+//      recordings carry) is fitted, one parameter each, on the first
 //      `fit_fraction` of every recording and judged on the rest. Cost = Σ_channels w_c·MSE_c with
 //      w_c = 1/s_c², s_c the within-recording spread of the channel (floored), so that levels,
 //      gate position and flow all count. Score = relative reduction of the held-out cost.
@@ -12,9 +13,10 @@
 //      the nominal model's), so an effect that explains one channel fully counts.
 //      An effect is *significant* when its score ≥ min_score, its BIC on the fitted part improves
 //      by at least min_bic_gain (with the number of samples corrected for residual correlation),
-//      and its parameter is material (catalog.hpp).
-//   4. Verdict: the best significant effect; else `none` when the nominal residual is within the
-//      measurement noise; else `unexplained`.
+//      its parameter is material (catalog.hpp) and its held-out fit improves (pipeline.hpp).
+//   4. Verdict: the best significant effect; else `none` when every level channel's nominal
+//      residual is within its noise or what the calibration left on it; else `unexplained`,
+//      located, with a discrepancy model (pipeline.hpp).
 //   5. Refit: the winner's parameter with a standard deviation (curvature of the cost, inflated
 //      by residual correlation), Nrmse before/after on fitted and held-out parts, residual tests
 //      after.
@@ -68,14 +70,15 @@ struct DiagnoseOptions {
   // Leading seconds of every recording left out of costs, tests and location. None by default:
   // the replay starts from the steady state of the recording's own initial state (its
   // operating_opening_mm metadata or first command; with use_recorded_upstream also its first
-  // upstream level), so every sample after it is comparable — the first 10 s once dropped were a
-  // fifth of a short step test (issue 13). At most a third of a recording is dropped.
+  // upstream level), so every sample after it is comparable (10 s would be a fifth of a short
+  // step test). At most a third of a recording is dropped.
   double warmup_s = 0.0;         // >= 0
   // What a calibration of the scenario left open (docs/calibration.md): calibration parameter name
   // (cd_free, cd_submerged, manning_n, downstream_opening_mm, offset_mm, offset_y_dwe_mm, ...) →
   // one standard deviation in its unit. An effect that moves a calibrated parameter is material
-  // only beyond `calibrated_z` of these standard deviations (issue 13: "material only where it
-  // exceeds what the calibration leaves open"). Empty for an uncalibrated scenario.
+  // only beyond `calibrated_z` of these standard deviations: material only where it exceeds what
+  // the calibration leaves open. A calibrated scenario's [calibration.std_alone] (else
+  // [calibration.std]) fills it. Empty for an uncalibrated scenario.
   std::map<std::string, double> calibrated_std;
   double calibrated_z = 3.0;     // > 0
   // Primary-channel residual RMS the calibration left on its own baseline recordings [mm] (0 =

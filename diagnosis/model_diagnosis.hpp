@@ -43,7 +43,7 @@ struct ModelDiagnoseOptions {
   double min_bic_gain = 10.0;      // BIC improvement on the fitted part; >= 0
   double none_noise_factor = 3.0;  // "within the noise": residual RMS <= this × noise; > 0
   // Leading seconds left out of costs and tests; >= 0. None by default: the model starts from the
-  // recording's own initial level and opening, so every sample counts (issue 13).
+  // recording's own initial level and opening, so every sample counts.
   double warmup_s = 0.0;
   // Effects the nominal model already includes (eqs. 16–17); 0 = off.
   double quantum_mm = 0.0;

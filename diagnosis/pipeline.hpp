@@ -5,7 +5,7 @@
 //   2. explain: every candidate effect fitted and judged on held-out data (by the Explainer);
 //   3. rank: significant first, then effects that could be evaluated, then by score;
 //   4. verdict: the best significant effect, else `none` (within the noise) or `unexplained`;
-//   5. explanation with several effects (issue 13): each remaining candidate is fitted jointly
+//   5. explanation with several effects: each remaining candidate is fitted jointly
 //      with the effects found so far (all their parameters free) and the best one added while its
 //      held-out gain over the explanation without it stays significant. A significant runner-up
 //      such that neither it adds to the verdict nor the verdict to it is reported with the

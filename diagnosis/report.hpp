@@ -1,4 +1,4 @@
-// Diagnosis output: the JSON document (fields of issue 5: verdict, effects, mismatch) and a
+// Diagnosis output: the JSON document (verdict, effects, mismatch, channels, thresholds) and a
 // self-contained HTML page (inline SVG, no scripts fetched from anywhere).
 #pragma once
 
