@@ -67,9 +67,15 @@ TEST(Catalog, EveryRowCarriesTheEditOfWhatItActsOn) {
     // A drawn magnitude is material and inside the search range.
     EXPECT_GE(k.draw.low, k.material) << k.name;
     EXPECT_LE(k.theta_none + k.draw.high, k.theta_high) << k.name;
-    if (k.draw.either_sign) EXPECT_GE(k.theta_none - k.draw.high, k.theta_low) << k.name;
-    if (k.twin_without_gate_position) EXPECT_NE(kind_named(k.twin_without_gate_position), nullptr) << k.name;
-    if (k.spanned_by) EXPECT_NE(kind_named(k.spanned_by), nullptr) << k.name;
+    if (k.draw.either_sign) {
+      EXPECT_GE(k.theta_none - k.draw.high, k.theta_low) << k.name;
+    }
+    if (k.twin_without_gate_position) {
+      EXPECT_NE(kind_named(k.twin_without_gate_position), nullptr) << k.name;
+    }
+    if (k.spanned_by) {
+      EXPECT_NE(kind_named(k.spanned_by), nullptr) << k.name;
+    }
   }
 }
 
