@@ -256,7 +256,8 @@ std::string text_summary(const Diagnosis& d) {
     for (const auto& t : d.thresholds) s << "  " << t.effect << ": " << threshold_text(t) << '\n';
     if (!d.lowering_experiment.empty()) s << "  " << d.lowering_experiment << '\n';
   }
-  for (const auto& e : to_json(d)["passed_over"]) {
+  const json document = to_json(d);  // kept alive: a range over a member of a temporary would dangle
+  for (const auto& e : document["passed_over"]) {
     s << "set aside: " << e["name"].get<std::string>() << " (score " << fixed(e["score"].get<double>(), 2)
       << "): " << e["why"].get<std::string>() << '\n';
   }
