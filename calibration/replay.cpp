@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 
@@ -317,9 +319,7 @@ std::optional<std::pair<double, double>> clock_on_sample_instants(const std::vec
   return best;
 }
 
-}  // namespace
-
-std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
+std::vector<double> search_command_clock(const std::vector<double>& t, const std::vector<double>& u) {
   std::vector<std::size_t> changes;
   for (std::size_t k = 1; k < u.size(); ++k) {
     if (u[k] != u[k - 1]) changes.push_back(k);
@@ -380,6 +380,31 @@ std::vector<double> command_switch_times(const std::vector<double>& t, const std
   std::vector<double> out;
   for (std::size_t k : changes) out.push_back(phase + std::ceil((t[k - 1] - tol - phase) / period) * period);
   return out;
+}
+
+}  // namespace
+
+std::vector<double> command_switch_times(const std::vector<double>& t, const std::vector<double>& u) {
+  // The search takes tens of milliseconds per recording and a calibration asks it again for every
+  // problem it builds on the same recordings (each grid, the validation, the time-offset scan, the
+  // written model's check): the answers are remembered, keyed by the command itself (an exact
+  // comparison, not a hash), for the last few commands asked.
+  constexpr std::size_t kRemembered = 64;
+  using Key = std::pair<std::vector<double>, std::vector<double>>;
+  static std::mutex guard;
+  static std::map<Key, std::vector<double>> remembered;
+  const auto finite = [](const std::vector<double>& v) { return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); }); };
+  if (!finite(t) || !finite(u)) return search_command_clock(t, u);  // the key's ordering needs numbers
+  Key key{t, u};
+  {
+    const std::lock_guard<std::mutex> lock(guard);
+    if (const auto it = remembered.find(key); it != remembered.end()) return it->second;
+  }
+  std::vector<double> switches = search_command_clock(t, u);
+  const std::lock_guard<std::mutex> lock(guard);
+  if (remembered.size() >= kRemembered) remembered.clear();
+  remembered.emplace(std::move(key), switches);
+  return switches;
 }
 
 std::vector<std::string> check_recordings(const Scenario& s, const std::vector<Recording>& recordings) {

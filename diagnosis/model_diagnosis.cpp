@@ -7,6 +7,7 @@
 #include <chrono>
 #include <complex>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -67,7 +68,23 @@ using Predictions = std::vector<std::vector<double>>;
 
 struct Scores {
   double fit_mse = 0.0, heldout_mse = 0.0;
-  double fit_nrmse = 0.0, heldout_nrmse = 0.0;  // mean over recordings, %
+  double fit_nrmse = 0.0, heldout_nrmse = 0.0;  // mean over recordings, %; NaN where not defined
+};
+
+// The mean Nrmse (eq. 19) over the recordings whose part varies: on levels that stay constant the
+// index divides by zero and says nothing of the fit. NaN when no part varies.
+class MeanNrmse {
+ public:
+  void add(const std::vector<double>& model, const std::vector<double>& data) {
+    if (data.empty() || std::all_of(data.begin(), data.end(), [&](double v) { return v == data.front(); })) return;
+    sum_ += reduced::nrmse_percent(model, data);
+    ++count_;
+  }
+  double mean() const { return count_ > 0 ? sum_ / count_ : std::numeric_limits<double>::quiet_NaN(); }
+
+ private:
+  double sum_ = 0.0;
+  int count_ = 0;
 };
 
 class ModelEngine {
@@ -123,6 +140,7 @@ class ModelEngine {
 
   Scores score(const Predictions& p) const {
     Scores s;
+    MeanNrmse fit_nrmse, heldout_nrmse;
     double fit_sq = 0.0, held_sq = 0.0;
     std::size_t fit_n = 0, held_n = 0;
     for (std::size_t i = 0; i < data_.size(); ++i) {
@@ -141,14 +159,13 @@ class ModelEngine {
       auto part = [](const std::vector<double>& v, std::size_t a, std::size_t b) {
         return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(a), v.begin() + static_cast<std::ptrdiff_t>(b));
       };
-      s.fit_nrmse += reduced::nrmse_percent(part(p[i], sp.warm, sp.n_fit), part(y, sp.warm, sp.n_fit));
-      s.heldout_nrmse += reduced::nrmse_percent(part(p[i], sp.n_fit, sp.n), part(y, sp.n_fit, sp.n));
+      fit_nrmse.add(part(p[i], sp.warm, sp.n_fit), part(y, sp.warm, sp.n_fit));
+      heldout_nrmse.add(part(p[i], sp.n_fit, sp.n), part(y, sp.n_fit, sp.n));
     }
-    const auto count = static_cast<double>(std::max<std::size_t>(data_.size(), 1));
     s.fit_mse = fit_sq / static_cast<double>(std::max<std::size_t>(fit_n, 1));
     s.heldout_mse = held_sq / static_cast<double>(std::max<std::size_t>(held_n, 1));
-    s.fit_nrmse /= count;
-    s.heldout_nrmse /= count;
+    s.fit_nrmse = fit_nrmse.mean();
+    s.heldout_nrmse = heldout_nrmse.mean();
     return s;
   }
 
@@ -169,6 +186,14 @@ class ModelEngine {
                      bool material) const {
     EffectResult r;
     r.name = name;
+    // A corrected model whose output leaves the finite numbers (a nonlinear form fitted to
+    // recordings with outliers can diverge on the held-out part) explains nothing.
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!std::all_of(p[i].begin(), p[i].end(), [](double v) { return std::isfinite(v); })) {
+        r.note = "the corrected model's output diverges on " + data_[i].source;
+        return r;
+      }
+    }
     r.parameter = std::move(parameter);
     r.material = material;
     const Scores after = score(p);
@@ -184,7 +209,10 @@ class ModelEngine {
     r.delta_bic = bic_change(effective_fit_samples(), nominal_scores_.fit_mse, after.fit_mse, extra);
     // "Show the fit improve": the held-out Nrmse (mean over recordings) must rise too — the pooled
     // squared residual can fall through one recording while the others get worse.
-    r.heldout_improves = r.heldout_nrmse_after > r.heldout_nrmse_before;  // one channel: y_dwe_mm
+    // Where no held-out part varies the index is not defined and the held-out cost decides.
+    r.heldout_improves = std::isfinite(r.heldout_nrmse_before)
+                             ? r.heldout_nrmse_after > r.heldout_nrmse_before  // one channel: y_dwe_mm
+                             : after.heldout_mse < nominal_scores_.heldout_mse;
     const SignificanceRule rule{o_.min_score, o_.min_bic_gain, true};
     r.significant = is_significant(r, rule);
     r.set_aside = set_aside_reason(r, rule);

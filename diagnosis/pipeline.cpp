@@ -1,6 +1,7 @@
 #include "diagnosis/pipeline.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -119,7 +120,9 @@ std::string furthest_channel(const Diagnosis& d, double none_noise_factor) {
   return out;
 }
 
-std::string largest_group(const std::vector<GroupStat>& groups, const char* what) {
+std::string largest_group(const std::vector<GroupStat>& all, const char* what) {
+  std::vector<GroupStat> groups;  // a declared group no sample fell into says nothing
+  std::copy_if(all.begin(), all.end(), std::back_inserter(groups), [](const GroupStat& g) { return g.samples > 0; });
   if (groups.size() < 2) return "";
   const auto top = std::max_element(groups.begin(), groups.end(), [](const GroupStat& a, const GroupStat& b) { return a.rms < b.rms; });
   std::string out = std::string("largest ") + what + " " + top->name + " (RMS " + format_fixed(top->rms, 3) + " mm";
@@ -381,8 +384,21 @@ bool set_verdict(Diagnosis& d, double none_noise_factor) {
   }
   if (!unusual) {
     d.verdict = "none";
+    const bool white_beyond_noise = !d.channels.empty() && !d.channels.front().ordinary;
     std::string figures;
-    for (const auto& c : d.channels) figures += (figures.empty() ? "" : "; ") + describe(c);
+    for (const auto& c : d.channels) {
+      if (!white_beyond_noise || &c != &d.channels.front()) figures += (figures.empty() ? "" : "; ") + describe(c);
+    }
+    if (white_beyond_noise) {
+      // Beyond the noise estimate, yet white and uncorrelated with the command: isolated outliers
+      // or a noise the estimate misses, nothing a model of the canal or its instruments explains.
+      d.reason = "the nominal residual on " + describe(d.channels.front()) +
+                 " exceeds the noise but is white and uncorrelated with the command (outliers or unmodelled noise, "
+                 "nothing a model could still explain)" +
+                 (figures.empty() ? std::string() : "; the other level channels are ordinary (" + figures + ")") +
+                 ", and no candidate improves the held-out fit";
+      return false;
+    }
     d.reason = "the nominal residual is within " + format_g(none_noise_factor) +
                " x the noise or what the calibration leaves on its baseline on every level channel (" + figures +
                ") and no candidate improves the held-out fit";

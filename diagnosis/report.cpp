@@ -258,7 +258,7 @@ std::string text_summary(const Diagnosis& d) {
   }
   const json document = to_json(d);  // kept alive: a range over a member of a temporary would dangle
   for (const auto& e : document["passed_over"]) {
-    s << "set aside: " << e["name"].get<std::string>() << " (score " << fixed(e["score"].get<double>(), 2)
+    s << "set aside: " << e["name"].get<std::string>() << " (score " << fixed(e["score"].is_number() ? e["score"].get<double>() : std::nan(""), 2)
       << "): " << e["why"].get<std::string>() << '\n';
   }
   s << '\n';
@@ -276,9 +276,11 @@ std::string text_summary(const Diagnosis& d) {
       continue;
     }
     const std::string p = format_estimate(e.parameter.value, e.parameter.std) + " " + e.parameter.unit;
-    std::snprintf(line, sizeof line, "%-*s %7.3f %4s %26s %9.2f %9.2f %9.2f %9.2f %8.0f\n", width, e.name.c_str(),
-                  e.score, e.significant ? "yes" : "", p.c_str(), e.nrmse_before, e.nrmse_after,
-                  e.heldout_nrmse_before, e.heldout_nrmse_after, e.delta_bic);
+    // An index that is not defined (Nrmse of a part whose levels do not vary) prints as "-".
+    std::snprintf(line, sizeof line, "%-*s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, e.name.c_str(),
+                  fixed(e.score).c_str(), e.significant ? "yes" : "", p.c_str(), fixed(e.nrmse_before, 2).c_str(),
+                  fixed(e.nrmse_after, 2).c_str(), fixed(e.heldout_nrmse_before, 2).c_str(),
+                  fixed(e.heldout_nrmse_after, 2).c_str(), fixed(e.delta_bic, 0).c_str());
     s << line;
   }
   s << "\nwhere the nominal residual lives:\n";

@@ -3,6 +3,7 @@
 // result), outputs are one transaction that never overwrites an input or a device, every search
 // ends, and no degenerate input prints -inf or a diverged model with exit status 0.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -493,6 +494,32 @@ TEST(Adversarial, ScenarioInputsThatCannotApplyAreRefusedBeforeTheRun) {
   EXPECT_NE(nul.err.find("experiments[0].name contains the control character 0"), std::string::npos) << nul.err;
   EXPECT_FALSE(fs::exists(scratch / "out.csv"));
   EXPECT_FALSE(fs::exists(scratch / "od"));
+  fs::remove_all(scratch);
+}
+
+// Levels that stop varying part-way: the held-out part of the record is constant, so its Nrmse
+// (eq. 19, the fit's error over the data's own variation) divides by zero and is not defined.
+// The diagnosis says so ("-" in the table, null in the JSON) and judges the candidates on the
+// held-out cost instead; it never prints inf or nan.
+TEST(Adversarial, ADiagnosisOfLevelsThatStopVaryingLeavesTheUndefinedIndexOut) {
+  const fs::path scratch = scratch_dir("adv_constant_levels");
+  std::size_t rows = 0;
+  (void)with_rows([&](std::vector<std::string>&, std::size_t) { ++rows; });
+  std::ofstream(scratch / "flat.csv") << with_rows([&](std::vector<std::string>& f, std::size_t k) {
+    if (k > rows / 3) f[kDownstreamLevel] = "50.000";
+  });
+  const RunResult r = run_canalsim("diagnose --model lfom flat.csv --json flat.json", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(prints_non_finite(r.out)) << r.out;
+  const nlohmann::json d = nlohmann::json::parse(read_text(scratch / "flat.json"));
+  int judged = 0;
+  for (const auto& e : d["effects"]) {
+    if (!e.contains("heldout_nrmse_before") || e.value("note", "") != "") continue;
+    ++judged;
+    EXPECT_TRUE(e["heldout_nrmse_before"].is_null()) << e.dump();
+    EXPECT_TRUE(e["nrmse_before"].is_number()) << e.dump();  // the fitted part still varies
+  }
+  EXPECT_GT(judged, 0) << r.out;
   fs::remove_all(scratch);
 }
 
