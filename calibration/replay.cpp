@@ -434,11 +434,11 @@ std::vector<std::string> check_recordings(const Scenario& s, const std::vector<R
       problems.push_back(name + ": sampled every " + format(hr) + " s, but the scenario's sensors sample every " +
                          format(h) + " s (sensors.period_s)");
     }
-    // A logged command or position may read a little beyond the gate's range (a logger with an
-    // offset or a gain of its own; the gate stops at its limits, and the replay clamps it there):
-    // up to a tenth of the range. Further out the column is in another unit or belongs to
-    // another canal.
-    const double slack = 0.1 * max_mm;
+    // A logged command or position may read beyond the gate's range (a logger with an offset or a
+    // gain of its own, tens of percent off; the gate stops at its limits, and the replay clamps it
+    // there): up to 0.4 of the range. A column in another unit is off by a factor of ten or more
+    // (cm, inches, m), one of another canal's gate likewise.
+    const double slack = 0.4 * max_mm;
     for (const char* c : {columns::gate_command, columns::gate_position}) {
       if (!rec.has(c)) continue;
       const auto& v = rec.column(c);
@@ -446,7 +446,7 @@ std::vector<std::string> check_recordings(const Scenario& s, const std::vector<R
       for (std::size_t k = 0; k < v.size(); ++k) {
         if (v[k] < -slack - 1e-9 || v[k] > max_mm + slack + 1e-9) {
           problems.push_back(name + ": " + c + " = " + format(v[k]) + " mm at t = " + format(t[k]) +
-                             " s is outside the controlled gate's range 0.." + format(max_mm) + " mm (with a tenth of it to spare)");
+                             " s is outside the controlled gate's range 0.." + format(max_mm) + " mm (with 0.4 of it to spare)");
           break;
         }
       }

@@ -1,4 +1,4 @@
-// Owning handles for SuiteSparse KLU's complex sparse LU (issue 11: RAII for every KLU object),
+// Owning handles for SuiteSparse KLU's complex sparse LU (RAII: each KLU object freed once),
 // and the solver of the frequency sweep: one symbolic analysis of the pattern, then per frequency
 // a numeric factorisation of iωI − A and one solve.
 //

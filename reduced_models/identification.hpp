@@ -89,7 +89,7 @@ struct FitOptions {
   int max_evaluations = 2000;        // per NLopt run
   // NLopt reruns from the best point found, alternating BOBYQA and SBPLX: the IAE of a quantised
   // output is rough, and one optimiser stalls where the other walks on. The nonlinear models
-  // (NLIOM/NLFOM-S/F) need more: an NLIOM-F fit of issue 14 stopped at γ 2.73, IAE 8.9 mm·s,
+  // (NLIOM/NLFOM-S/F) need more: an NLIOM-F fit of a lab recording stopped at γ 2.73, IAE 8.9 mm·s,
   // after one restart and reached γ 3.01, IAE 5.4, after two; an NLFOM-F fit needed three.
   int restarts = 1;
   int nonlinear_restarts = 3;

@@ -7,7 +7,7 @@
 //   independent_truth()   the numerics: more cells, the other limiter, a smaller Courant number,
 //                         optionally the paper's simple gate laws (eqs. 9, 11) instead of Swamee's;
 //   perturb_uncertain()   the physics a laboratory does not know exactly, each drawn within its
-//                         tolerance (issue 13): the head gate's free and submerged discharge
+//                         tolerance: the head gate's free and submerged discharge
 //                         coefficients, every pool's Manning n, the downstream gate's opening, the
 //                         tail level, and every level sensor's offset.
 #pragma once

@@ -1,5 +1,5 @@
-// Owning handles for the SUNDIALS objects the steady-state solver uses (issue 11: RAII for every
-// SUNDIALS and KLU object). Each handle frees its object once, in its destructor, whatever path
+// Owning handles for the SUNDIALS objects the steady-state solver uses (RAII for every SUNDIALS
+// and KLU object). Each handle frees its object once, in its destructor, whatever path
 // leaves the scope; none is copyable, all are movable. The sundials::Context must outlive every
 // object created with it: declare it first, so it is destroyed last.
 //

@@ -1,4 +1,4 @@
-// The Bode section of the study (issue 15; docs/linearization.md §6–7): per operating point, the
+// The Bode section of the study (docs/linearization.md §6–7): per operating point, the
 // linearised Saint-Venant pool's frequency response (gate → y_dwe) over the PRBS band beside
 // those of the LIOM and LFOM fitted to the recording in the time domain, and one computed
 // sentence saying whether the pool is fractional in that band. `canalsim reproduce` writes it as

@@ -4,7 +4,7 @@
 // recorded-upstream`; BM_CalibrateAsTheCommandLineDoes runs the command's defaults). The
 // recordings come from a truth the model cannot represent exactly: 1.5× the cells, minmod at
 // Courant 0.5, the six parameters perturbed, level noise 0.05 mm on the 0.05 mm quantisation.
-// Issue 12's target: at most 30 s on this 2-core machine (on the scenario's grid; with the grid
+// Target: at most 30 s on this 2-core machine (on the scenario's grid; with the grid
 // refinement of `canalsim calibrate` the refined grids add their own time). Counters: simulations, LM iterations,
 // process_cpu_s (the CPU time of every thread of the process: the machine is shared, so the wall
 // time depends on the load, the CPU time much less).

@@ -1,7 +1,7 @@
 // One diagnosis of four 255.5 s laboratory recordings (op1–op4) with the whole catalog, on two
 // threads, as `canalsim diagnose --scenario lab op1.csv op2.csv op3.csv op4.csv` runs it. The
 // recordings carry a concealed gate leakage of 1.5 mm so that every candidate is really fitted.
-// Issue 5's target: at most 60 s.
+// Target: at most 60 s.
 #include <benchmark/benchmark.h>
 
 #include "diagnosis/baseline.hpp"
@@ -53,7 +53,7 @@ void BM_DiagnoseFourLabRecordings(benchmark::State& state) {
 
 BENCHMARK(BM_DiagnoseFourLabRecordings)->Arg(2)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
-// Issue 13's target (at most 60 s): calibrate the lab scenario on four clean 255.5 s baseline
+// Target at most 60 s: calibrate the lab scenario on four clean 255.5 s baseline
 // recordings, then diagnose four recordings against it (diagnose_with_baseline, as `canalsim
 // diagnose --scenario lab --baseline B1..B4 -- R1..R4`). Both sets come from a truth the model
 // cannot represent exactly (testing/realistic.hpp: 4× the cells, the other limiter and Courant

@@ -600,7 +600,7 @@ TEST(Calibrate, AParameterWhoseOptimumIsAtItsBoundIsHeldThere) {
 }
 
 // A flume closed at its downstream end (the downstream gate shut) has no steady state with the
-// head gate open: the inflow has nowhere to go, and Newton cannot converge. Issue 12: a failed
+// head gate open: the inflow has nowhere to go, and Newton cannot converge. A failed
 // steady state is never silent — here a warning naming the state the replay starts from instead,
 // once per recording although the calibration simulates each recording many times.
 Scenario closed_flume() {
@@ -765,7 +765,7 @@ TEST(Calibrate, BadInputIsOneLineNamingWhatIsWrong) {
   // A recording of another canal (the ASCE canal 1) is refused, naming it.
   const Scenario asce = scenarios::builtin_scenario("asce1");
   scenarios::ExperimentSpec e = asce.experiments.front();
-  e.duration_s = 120.0;  // two samples at its 60 s period: a run of fewer is refused (issue 16)
+  e.duration_s = 120.0;  // two samples at its 60 s period: a run of fewer is refused
   Recording other = scenarios::simulate(asce, e);
   other.source = "asce1.csv";
   o.parameters = {};

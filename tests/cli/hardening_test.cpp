@@ -1,4 +1,4 @@
-// What an adversarial user found (issue 16): outputs destroyed by failing runs, runs that hang in
+// What an adversarial user found: outputs destroyed by failing runs, runs that hang in
 // silence, NaN printed with exit status 0. Each test fails on the code before the fix.
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Diagnosis against a calibrated baseline (diagnosis/baseline.hpp). The truth is the laboratory
 // canal simulated differently (testing/realistic.hpp: four times the cells, the other limiter and
-// Courant number) with its uncertain parameters off the scenario's values by the tolerances of
-// issue 13 (discharge coefficient, Manning n, downstream opening, a level offset). Clean baseline
+// Courant number) with its uncertain parameters off the scenario's values by a laboratory's
+// tolerances (discharge coefficient, Manning n, downstream opening, a level offset). Clean baseline
 // recordings of that truth calibrate the scenario; the recordings to diagnose come from the same
 // truth, clean or with a concealed effect. Also: the [calibration.std] table that carries the
 // calibrated deviations from `canalsim calibrate` to `canalsim diagnose`, and the checks that

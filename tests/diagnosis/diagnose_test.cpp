@@ -155,6 +155,20 @@ TEST(Diagnose, MismatchedRecordingsAreNamedWithTheReason) {
   missing.source = "missing.csv";
   missing.set_column("t_s", t);
   missing.set_column("u_mm", u);
+  // A command logged with a gain 30 % high reads 65 mm at the gate's 50 mm top: a logger's own
+  // error, replayed clamped, not another unit (80 mm is refused above).
+  Recording high_gain;
+  high_gain.source = "high_gain.csv";
+  std::vector<double> th, uh, yh;
+  for (int k = 0; k < 100; ++k) {
+    th.push_back(lab.sensors.period_s * k);
+    uh.push_back(1.3 * (k % 20 < 10 ? 45.0 : 50.0));
+    yh.push_back(40.0 + 0.1 * (k % 20 < 10));
+  }
+  high_gain.set_column("t_s", th);
+  high_gain.set_column("u_mm", uh);
+  high_gain.set_column("y_dwe_mm", yh);
+  EXPECT_TRUE(check_recordings(lab, {high_gain}).empty()) << check_recordings(lab, {high_gain}).front();
   const auto problems = check_recordings(lab, {r, missing});
   ASSERT_EQ(problems.size(), 4u);
   EXPECT_NE(problems[0].find("bad.csv: sampled every 0.2 s"), std::string::npos) << problems[0];

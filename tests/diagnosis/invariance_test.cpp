@@ -1,4 +1,4 @@
-// A verdict must not depend on how the logger recorded the same experiment (issue 13, item 4):
+// A verdict must not depend on how the logger recorded the same experiment:
 // the gate command in mm or in actuator counts with a declared scale (u_unit / u_scale_mm_per_unit,
 // docs/recording-format.md), and every sample or every fourth. The recordings come from a truth
 // the diagnosis' model cannot represent exactly (testing/realistic.hpp: four times the cells, the

@@ -1,4 +1,4 @@
-// Reports: the JSON carries the fields of issue 5; the HTML page is self-contained.
+// Reports: the JSON carries every field docs/diagnosis.md lists; the HTML page is self-contained.
 #include "diagnosis/report.hpp"
 
 #include <gtest/gtest.h>

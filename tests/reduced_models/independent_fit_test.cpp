@@ -1,7 +1,7 @@
 // Our LIOM fit against an independent least-squares fit of the same model, written here from
 // scratch, on a truth the LIOM cannot represent (two lags in series, 40 s and 4 s, behind a 2 s
 // delay) read by a realistic sensor (testing/realistic.hpp: offset, drift, noise, quantisation on
-// an offset lattice, jittered sampling). The acceptance of issue 14 on real recordings: "delays
+// an offset lattice, jittered sampling). The acceptance on real recordings: "delays
 // must be physical and the fits as good as an independent least-squares fit of the same model".
 //
 // The independent fit uses the closed-form step response of the continuous first-order lag,

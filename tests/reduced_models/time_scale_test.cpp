@@ -1,4 +1,4 @@
-// Identification at any time scale (issue 14): first-order-plus-delay step responses written in
+// Identification at any time scale: first-order-plus-delay step responses written in
 // closed form, y(t) = y0 + K A (1 − e^{−(t − t_step − L)/T}) after t_step + L, with noise and a
 // sensor that quantises with an offset, sampled at 0.125 s and at 0.01 s, for time constants of
 // 2 s to 5 min and delays of 0.5 to 12 s. The fitted LIOM must recover K and T within 5 %; L
