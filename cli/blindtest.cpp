@@ -1,6 +1,7 @@
 // `canalsim blindtest --trials N --seed S [--json F]`: conceals one catalog effect (or none) per
 // trial in the laboratory canal, simulates op1–op4 with it, diagnoses blind and prints the
 // confusion matrix, top-1 accuracy, false alarms, parameter error and held-out fit gain.
+#include <cmath>
 #include <iostream>
 #include <memory>
 
@@ -9,6 +10,7 @@
 #include "diagnosis/blindtest.hpp"
 #include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
+#include "core/format.hpp"
 #include "core/recording.hpp"
 
 namespace canalsim::cli {
@@ -73,9 +75,13 @@ void run(const BlindtestArguments& args) {
   if (args.verbose) {
     std::cout << "\ntrial  concealed              value  verdict                estimate   error   gain\n";
     for (const auto& t : result.trials) {
-      std::printf("%5d  %-21s %6.3f  %-21s %9.3f %6.1f%% %+6.2f %s\n", t.index, t.truth.effect.c_str(),
-                  t.truth.value, t.verdict.c_str(), t.estimate, 100.0 * t.parameter_error, t.heldout_gain,
-                  t.message.c_str());
+      // No estimate to compare where the verdict is another effect or the effect has no row.
+      const bool estimated = std::isfinite(t.parameter_error);
+      const std::string estimate = estimated ? format_fixed(t.estimate, 3) : "-";
+      const std::string error = estimated ? format_fixed(100.0 * t.parameter_error, 1) + "%" : "-";
+      const std::string gain = std::isfinite(t.heldout_gain) ? (t.heldout_gain < 0.0 ? "" : "+") + format_fixed(t.heldout_gain, 2) : "-";
+      std::printf("%5d  %-21s %6.3f  %-21s %9s %7s %7s %s\n", t.index, t.truth.effect.c_str(), t.truth.value,
+                  t.verdict.c_str(), estimate.c_str(), error.c_str(), gain.c_str(), t.message.c_str());
       if (t.second) {
         std::string named;
         for (const auto& n : t.named) named += (named.empty() ? "" : ", ") + n.effect;

@@ -257,6 +257,10 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     ++result.effect_trials;
     if (!t.correct) continue;
     ++result.effect_correct;
+    // A correct `none` (below threshold) or an unexplained residual located right names no
+    // parameter to compare.
+    if (!std::isfinite(t.parameter_error)) continue;
+    ++result.estimated;
     errors.push_back(t.parameter_error);
     gains.push_back(t.heldout_gain);
     result.within_25 += t.parameter_error <= 0.25;
@@ -320,6 +324,8 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
     if (const EffectKind* k = kind_named(c)) legend += (legend.empty() ? "" : ", ") + std::string(k->label) + " = " + k->name;
   }
   s << "\n(" << legend << (legend.empty() ? "" : ", ") << "unexpl = unexplained)\n\n";
+  // No estimate at all: its median and maximum are not defined, not 0%.
+  const auto percent = [&](double v) { return r.estimated > 0 ? format_fixed(100.0 * v, 1) + "%" : std::string("-"); };
   // A rate over no clean trials is undefined, not 0%.
   char rate[64];
   std::snprintf(rate, sizeof rate, "%d/%d = %.1f%%", r.false_alarms, r.clean_trials, 100.0 * r.false_alarm_rate);
@@ -327,13 +333,13 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
   std::snprintf(buf, sizeof buf,
                 "top-1 accuracy          %d/%zu = %.1f%% (effect trials %d/%d)\n"
                 "false alarms (clean)    %s\n"
-                "parameter error         median %.1f%%, max %.1f%%, within 25%%: %d/%d correct attributions\n"
-                "held-out Nrmse gain     median %+.2f points, min %+.2f, improved in %d/%d correct attributions\n"
+                "parameter error         median %s, max %s, within 25%%: %d/%d correct attributions with an estimate\n"
+                "held-out Nrmse gain     median %+.2f points, min %+.2f, improved in %d/%d of them\n"
                 "time                    %.1f s total, %.1f s per trial (one diagnosis of %zu recordings + their simulation)\n",
                 r.correct, r.trials.size() - static_cast<std::size_t>(r.two_effect_trials), 100.0 * r.accuracy, r.effect_correct, r.effect_trials,
-                false_alarms.c_str(), 100.0 * r.median_parameter_error,
-                100.0 * r.max_parameter_error, r.within_25, r.effect_correct, r.median_heldout_gain, r.min_heldout_gain,
-                r.gain_positive, r.effect_correct, r.seconds, r.mean_trial_seconds, o.experiments.size());
+                false_alarms.c_str(), percent(r.median_parameter_error).c_str(), percent(r.max_parameter_error).c_str(),
+                r.within_25, r.estimated, r.median_heldout_gain, r.min_heldout_gain, r.gain_positive, r.estimated,
+                r.seconds, r.mean_trial_seconds, o.experiments.size());
   s << buf;
   if (r.below_threshold > 0) {
     std::snprintf(buf, sizeof buf, "none below threshold    %d of the correct verdicts are `none` on an effect below its reported threshold\n",
@@ -387,7 +393,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
   return json{{"classes", r.classes}, {"confusion", r.confusion}, {"accuracy", r.accuracy},
               {"effect_trials", r.effect_trials}, {"effect_correct", r.effect_correct},
               {"clean_trials", r.clean_trials}, {"false_alarms", r.false_alarms},
-              {"false_alarm_rate", r.false_alarm_rate}, {"within_25", r.within_25},
+              {"false_alarm_rate", r.false_alarm_rate}, {"estimated", r.estimated}, {"within_25", r.within_25},
               {"median_parameter_error", r.median_parameter_error}, {"max_parameter_error", r.max_parameter_error},
               {"gain_positive", r.gain_positive}, {"mean_heldout_gain", r.mean_heldout_gain}, {"median_heldout_gain", r.median_heldout_gain},
               {"min_heldout_gain", r.min_heldout_gain}, {"two_effect_trials", r.two_effect_trials},

@@ -126,7 +126,8 @@ struct BlindtestResult {
   int outside_trials = 0, outside_located = 0;
   int clean_trials = 0, false_alarms = 0;
   double accuracy = 0.0, false_alarm_rate = 0.0;
-  int within_25 = 0;                          // correct attributions with parameter error <= 25%
+  int estimated = 0;                          // correct attributions that name a parameter to compare
+  int within_25 = 0;                          // of those, the ones with parameter error <= 25%
   double median_parameter_error = 0.0, max_parameter_error = 0.0;
   int gain_positive = 0;                      // correct attributions whose held-out Nrmse improved
   int two_effect_trials = 0, two_effect_both = 0;   // realistic: trials with two effects, both named
