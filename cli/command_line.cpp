@@ -83,6 +83,7 @@ void refuse_empty_values(CLI::App& app) {
 }  // namespace
 
 void add_all_commands(CLI::App& app) {
+  app.name("canalsim");  // usage lines name the program, not the path it was started by
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for every subcommand");
   add_version_command(app);

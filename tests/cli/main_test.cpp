@@ -88,6 +88,20 @@ TEST(Main, HelpPrintsHelpAndExitsZero) {
   r = run_canalsim("fit --help", scratch);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("--upstream-level"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Usage: canalsim fit "), std::string::npos) << r.out;  // the program, not its path
+  fs::remove_all(scratch);
+}
+
+// `--version` and `version` print the same lines: the program's version and its libraries'.
+TEST(Main, VersionIsAFlagAndASubcommand) {
+  const fs::path scratch = scratch_dir("main_version");
+  const RunResult flag = run_canalsim("--version", scratch);
+  const RunResult sub = run_canalsim("version", scratch);
+  EXPECT_EQ(flag.code, 0) << flag.err;
+  EXPECT_EQ(sub.code, 0) << sub.err;
+  EXPECT_EQ(flag.out.rfind("canalsim ", 0), 0u) << flag.out;
+  EXPECT_NE(flag.out.find("Eigen 3."), std::string::npos) << flag.out;
+  EXPECT_EQ(flag.out, sub.out);
   fs::remove_all(scratch);
 }
 
