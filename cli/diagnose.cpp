@@ -259,9 +259,9 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--scenario", args->scenario, "Built-in scenario name or TOML file");
   cmd->add_option("--model", args->model,
                   "Diagnose a reduced model instead (liom, sopd, lfom, nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid, id, idz)");
-  cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm already in the model (eq. 17)")
+  cmd->add_option("--quantum", args->quantum_mm, "--model: sensor resolution in mm already in the model (Gharab et al. 2019, eq. 17)")
       ->check(number_in(0.0, 100.0, "a resolution in mm"));
-  cmd->add_option("--gate-speed", args->gate_speed_mm_s, "--model: gate speed in mm/s already in the model (eq. 16)")
+  cmd->add_option("--gate-speed", args->gate_speed_mm_s, "--model: gate speed in mm/s already in the model (Gharab et al. 2019, eq. 16)")
       ->check(number_in(0.0, 1e6, "a speed in mm/s"));
   cmd->add_option("--upstream-level", args->upstream_level_mm,
                   "--model: constant upstream level in mm for recordings without y_up_mm")

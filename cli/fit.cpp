@@ -460,7 +460,7 @@ void add_fit_command(CLI::App& app) {
                                                   "y_up_mm for the nonlinear models)")
       ->required();  // a missing file is reported by the reader, naming it, like every file error
   cmd->add_flag("--nominal", args->nominal,
-                "Also fit one nominal model to all recordings (IAE_c, eq. 21) and report dp (eq. 22)");
+                "Also fit one nominal model to all recordings (IAE_c, Gharab et al. 2019, eq. 21) and report dp (eq. 22)");
   cmd->add_option("--gamma", args->gamma,
                   "Sweep gamma over first:last:step (e.g. 0:10:0.05) and keep the best Nrmse");
   cmd->add_option("--json", args->json, "Write parameters, IAE, Nrmse and responses as JSON");
@@ -469,10 +469,10 @@ void add_fit_command(CLI::App& app) {
                   "Constant upstream level in mm for recordings without y_up_mm")
       ->check(positive_number("a level in mm"));
   cmd->add_option("--quantum", args->quantum_mm,
-                  "Sensor resolution in mm included in the model output (eq. 17; 0 = off)")
+                  "Sensor resolution in mm included in the model output (Gharab et al. 2019, eq. 17; 0 = off)")
       ->check(number_in(0.0, 100.0, "a resolution in mm"));
   cmd->add_option("--gate-speed", args->gate_speed_mm_s,
-                  "Gate speed in mm/s for the rate limit (eq. 16; 0 = off)")
+                  "Gate speed in mm/s for the rate limit (Gharab et al. 2019, eq. 16; 0 = off)")
       ->check(number_in(0.0, 1e6, "a speed in mm/s"));
   cmd->add_option("--memory", args->memory, "GL memory: short (N terms, paper) or full")
       ->capture_default_str();
