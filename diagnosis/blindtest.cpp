@@ -244,6 +244,7 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     if (!t.truth_location.empty()) {
       ++result.outside_trials;
       result.outside_located += t.correct;
+      result.outside_below_model_error += t.below_model_error;
     }
     if (t.truth.effect.find('[') != std::string::npos) {
       ++result.channel_trials;
@@ -347,8 +348,10 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
     s << buf;
   }
   if (r.outside_trials > 0) {
-    std::snprintf(buf, sizeof buf, "outside the catalog     %d/%d = %.1f%% located (unexplained residual on the right channel and regime)\n",
-                  r.outside_located, r.outside_trials, 100.0 * r.outside_located / r.outside_trials);
+    std::snprintf(buf, sizeof buf, "outside the catalog     %d/%d = %.1f%% right: %d located (unexplained residual on the right channel and regime), "
+                  "%d `none` on an effect below the calibrated model's own error\n",
+                  r.outside_located, r.outside_trials, 100.0 * r.outside_located / r.outside_trials,
+                  r.outside_located - r.outside_below_model_error, r.outside_below_model_error);
     s << buf;
   }
   if (r.channel_trials > 0) {
@@ -376,7 +379,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
       named_values.push_back(n.value);
     }
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
-                      {"verdict", t.verdict}, {"correct", t.correct}, {"channel_right", t.channel_right}, {"estimate", num(t.estimate)},
+                      {"verdict", t.verdict}, {"reason", t.reason}, {"correct", t.correct}, {"channel_right", t.channel_right}, {"estimate", num(t.estimate)},
                       {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
                       {"seconds", t.seconds}, {"message", t.message}, {"named", named}, {"named_values", named_values}});
     if (t.second) {
@@ -387,6 +390,9 @@ nlohmann::json to_json(const BlindtestResult& r) {
     if (!t.truth_location.empty()) {
       trials.back()["truth_location"] = t.truth_location;
       trials.back()["located"] = t.located;
+      trials.back()["signature_rms_mm"] = num(t.signature_rms_mm);
+      trials.back()["model_error_mm"] = num(t.model_error_mm);
+      trials.back()["below_model_error"] = t.below_model_error;
     }
     trials.back()["below_threshold"] = t.below_threshold;
   }
@@ -400,6 +406,7 @@ nlohmann::json to_json(const BlindtestResult& r) {
               {"two_effect_both_named", r.two_effect_both}, {"channel_trials", r.channel_trials},
               {"channel_right", r.channel_right}, {"below_threshold", r.below_threshold},
               {"outside_trials", r.outside_trials}, {"outside_located", r.outside_located},
+              {"outside_below_model_error", r.outside_below_model_error},
               {"seconds", r.seconds}, {"trials", trials}};
 }
 

@@ -96,6 +96,7 @@ struct Trial {
   ConcealedEffect truth;
   std::optional<ConcealedEffect> second;  // two-effect trials
   std::string verdict;
+  std::string reason;               // the diagnosis' one sentence on how the verdict was reached
   // The diagnosis' explanation, the verdict first and any further effects, each with its jointly
   // refitted parameter in the catalog's units.
   std::vector<EffectValue> named;
@@ -106,6 +107,11 @@ struct Trial {
   bool below_threshold = false;     // `none`, and the reported threshold does not reveal the drawn value
   std::string truth_location;       // out of the catalog: "channel, regime" where it changes the levels most
   std::string located;              // the diagnosis' unexplained residual: "channel, regime"
+  // Out of the catalog: the effect's RMS change of that channel (noise-free runs with and without
+  // it), and realistic: the calibrated model's residual RMS there on its clean baseline. An effect
+  // whose change is below what the model misses anyway cannot be seen: `none` on it counts right.
+  double signature_rms_mm = 0.0, model_error_mm = 0.0;
+  bool below_model_error = false;
   double parameter_error = 0.0;     // relative (see docs/diagnosis.md); NaN without an effect
   double heldout_gain = 0.0;        // held-out Nrmse after − before of the verdict [points]
   bool correct = false;
@@ -124,6 +130,9 @@ struct BlindtestResult {
   int below_threshold = 0;
   // Out-of-catalog trials, and those located right (an unexplained residual on their channel and regime).
   int outside_trials = 0, outside_located = 0;
+  // Of the correct out-of-catalog trials, those answered `none` on an effect whose change is below
+  // the calibrated model's residual on its clean baseline (Trial::below_model_error).
+  int outside_below_model_error = 0;
   int clean_trials = 0, false_alarms = 0;
   double accuracy = 0.0, false_alarm_rate = 0.0;
   int estimated = 0;                          // correct attributions that name a parameter to compare

@@ -337,6 +337,26 @@ EffectResult Engine::explain(const std::string& candidate) {
   return judge(effect, std::move(best), sims);
 }
 
+std::vector<RecordingEstimate> Engine::per_recording_estimates(const std::string& name) {
+  const Effect effect = *effect_from_name(name);
+  if (recordings_.size() < 2 || effect.kind->acts == Acts::readings) return {};
+  std::vector<std::vector<Recording>> alone;
+  for (const Recording& r : recordings_) alone.push_back({r});
+  std::vector<RecordingEstimate> out(recordings_.size());
+  parallel_for(recordings_.size(), o_.threads, [&](std::size_t i) {
+    Engine engine(base_, alone[i], o_);
+    engine.carried_ = carried_;
+    if (!carried_inflow_m3s_.empty()) engine.carried_inflow_m3s_ = {carried_inflow_m3s_.at(i)};
+    engine.nominal_residuals();
+    const EffectResult fitted = engine.explain(name);
+    const double theta = to_theta(effect, fitted.parameter.value);
+    const double per_theta = parameter_per_theta(effect, theta);
+    out[i] = {recs_.at(i).name, fitted.parameter, theta - effect.kind->theta_none,
+              per_theta > 0.0 ? fitted.parameter.std / per_theta : std::numeric_limits<double>::quiet_NaN()};
+  });
+  return out;
+}
+
 // Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
 // point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
 // parameter's unit.

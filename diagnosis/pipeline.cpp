@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -54,6 +55,17 @@ void prefer_the_plainer_of_a_tie(std::vector<EffectResult>& effects) {
     if (row_of(effects[i].name) < row_of(effects[lead].name)) lead = i;
   }
   std::rotate(effects.begin(), effects.begin() + static_cast<std::ptrdiff_t>(lead), effects.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
+}
+
+// Significant effects first, then those that could be evaluated, each group by held-out score;
+// the plainer of a tie leads.
+void rank(std::vector<EffectResult>& effects) {
+  std::stable_sort(effects.begin(), effects.end(), [](const EffectResult& a, const EffectResult& b) {
+    if (a.significant != b.significant) return a.significant;
+    if (a.note.empty() != b.note.empty()) return a.note.empty();
+    return a.score > b.score;
+  });
+  prefer_the_plainer_of_a_tie(effects);
 }
 
 // Step 5 of the pipeline (header): adds to the verdict, while one is significant, the remaining
@@ -192,7 +204,77 @@ UnexplainedResidual locate_unexplained(const std::vector<RecordingResiduals>& se
   return u;
 }
 
+// "op1 0.117 ± 0.002, op3 0.349 ± 0.003"
+std::string list_estimates(const FormCheck& f) {
+  std::string out;
+  for (const auto& e : f.estimates) {
+    out += (out.empty() ? "" : ", ") + e.recording + " " + format_estimate(e.parameter.value, e.parameter.std);
+  }
+  return out;
+}
+
+// "its fraction_of_inflow differs between them (op1 0.117 ± 0.002, op3 0.349 ± 0.003)"
+std::string differs(const EffectResult& e, const FormCheck& f) {
+  return "fitted to each recording alone its " + e.parameter.name + " differs between them (" + list_estimates(f) +
+         (e.parameter.unit == std::string("-") ? "" : " " + e.parameter.unit) + ")";
+}
+
+// Step 5, when the verdict's form does not hold: it explains the residual, but not as one
+// constant of the canal — the physics has another form than the catalog's row (a seepage that
+// grows with the depth fitted as a constant share of the inflow). The verdict is `unexplained`,
+// whatever the channels' figures; the row stays in d.effects and d.form as the nearest the
+// catalog has.
+void set_verdict_outside_catalog(Diagnosis& d, const EffectResult& nearest) {
+  d.reason = nearest.name + " reduces the held-out cost by " + format_g(std::round(100.0 * nearest.score)) + "%, but " +
+             differs(nearest, *d.form) +
+             " far beyond what the model's error moves it: not one constant of the canal, so the physics is not in "
+             "the catalog (" + nearest.name + " is its nearest row)";
+  d.verdict = "unexplained";
+}
+
+// Step 5, for a verdict that explains alone (an explanation of one effect): its form across the
+// recordings. When it does not hold, the effect is set aside (`set_aside` says why) and the
+// verdict is `unexplained` with it as the nearest row. An effect of an explanation of several is
+// not checked alone: fitted without the others, its parameter takes up theirs, which differ
+// between operating points (a leak beside a downstream gate set lower). Returns whether the
+// verdict stands.
+bool verdict_form_holds(Explainer& explainer, const PipelineSettings& settings, Diagnosis& d,
+                        const std::function<void(double, const std::string&)>& progress) {
+  if (d.explanation.size() != 1) return true;
+  progress(0.95, "form of " + d.verdict + " across the recordings");
+  d.form = check_form(d.verdict, explainer.per_recording_estimates(d.verdict), settings);
+  if (!d.form || d.form->holds) return true;
+  EffectResult& nearest = d.effects.front();
+  nearest.significant = false;
+  nearest.set_aside = differs(nearest, *d.form) + ": not one constant of the canal";
+  set_verdict_outside_catalog(d, nearest);
+  d.explanation.clear();
+  d.ambiguous.clear();
+  return false;
+}
+
 }  // namespace
+
+std::optional<FormCheck> check_form(const std::string& effect, std::vector<RecordingEstimate> estimates,
+                                    const PipelineSettings& settings) {
+  const bool all_finite = std::all_of(estimates.begin(), estimates.end(), [](const RecordingEstimate& e) {
+    return std::isfinite(e.departure) && std::isfinite(e.departure_std);
+  });
+  if (estimates.size() < 2 || !all_finite) return std::nullopt;
+  FormCheck f;
+  f.effect = effect;
+  f.estimates = std::move(estimates);
+  const auto [low, high] = std::minmax_element(f.estimates.begin(), f.estimates.end(), [](const auto& a, const auto& b) {
+    return a.departure < b.departure;
+  });
+  double mean = 0.0;
+  for (const auto& e : f.estimates) mean += e.departure / static_cast<double>(f.estimates.size());
+  const double spread = high->departure - low->departure;
+  f.relative_spread = mean != 0.0 ? spread / std::abs(mean) : std::numeric_limits<double>::quiet_NaN();
+  const double spread_std = std::hypot(low->departure_std, high->departure_std);
+  f.holds = !(spread > settings.form_spread * std::abs(mean) && spread > settings.form_z * spread_std);
+  return f;
+}
 
 Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& candidates,
                        const PipelineSettings& settings) {
@@ -213,16 +295,12 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
       progress(0.1 + 0.85 * static_cast<double>(i) / static_cast<double>(candidates.size()), candidates[i]);
       d.effects.push_back(explainer.explain(candidates[i]));
     }
-    std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-      if (a.significant != b.significant) return a.significant;
-      if (a.note.empty() != b.note.empty()) return a.note.empty();
-      return a.score > b.score;
-    });
-    prefer_the_plainer_of_a_tie(d.effects);
-    const std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
+    rank(d.effects);
+    std::string corrected = set_verdict(d, settings.none_noise_factor) ? d.verdict : "";
     if (!corrected.empty()) {
       explain_with_several(explainer, settings, d,
                            [&](const std::string& candidate) { progress(0.95, "explanation: " + candidate); });
+      if (!verdict_form_holds(explainer, settings, d, progress)) corrected.clear();
     }
     if (d.verdict == "unexplained") d.unexplained = locate_unexplained(before, d, settings);
     const auto after = explainer.residuals_with(corrected);

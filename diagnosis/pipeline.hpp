@@ -10,7 +10,12 @@
 //      held-out gain over the explanation without it stays significant. A significant runner-up
 //      such that neither it adds to the verdict nor the verdict to it is reported with the
 //      verdict as an ambiguous pair (the recordings cannot tell them apart), with the experiment
-//      that would;
+//      that would. A verdict that explains alone (nothing added to it) then has its form checked
+//      across the recordings: its parameter, fitted to each recording alone, must be one
+//      constant of the canal (a catalog row's parameter is). Estimates that differ between
+//      operating points far beyond what the model's error moves them mean physics the catalog
+//      does not have: the verdict becomes `unexplained`, located, with the effect as the
+//      catalog's nearest row;
 //   6. the corrected prediction of the verdict → locate and test again;
 //   7. what the recordings cannot show: each candidate's detection threshold, from the residual
 //      the model with the verdict leaves and the candidate's signature (its prediction's change
@@ -127,6 +132,23 @@ struct UnexplainedResidual {
   std::string summary;           // in words: channel, regime, operating point, windows, band, form
 };
 
+// The verdict's parameter fitted to each recording alone (step 5).
+struct RecordingEstimate {
+  std::string recording;
+  ParameterEstimate parameter;
+  // The estimate's departure from "no effect" in the effect's internal coordinate (catalog.hpp),
+  // and its standard deviation there: comparable between recordings and effects.
+  double departure = 0.0, departure_std = 0.0;
+};
+
+struct FormCheck {
+  std::string effect;
+  std::vector<RecordingEstimate> estimates;
+  // (largest − smallest departure) / |mean departure|; NaN when the mean departure is 0.
+  double relative_spread = 0.0;
+  bool holds = true;
+};
+
 struct Diagnosis {
   bool ok = true;
   std::string message;           // numerical failure (a simulation that did not run), when !ok
@@ -135,6 +157,9 @@ struct Diagnosis {
   std::vector<EffectResult> effects;   // ranked, best first
   std::vector<ExplainedEffect> explanation;  // the verdict first, then each effect added; empty without a verdict
   std::vector<AmbiguousPair> ambiguous;
+  // The form check of a verdict that explains alone (step 5); nullopt when the engine cannot
+  // fit it per recording, or there is one recording.
+  std::optional<FormCheck> form;
   Mismatch mismatch;             // of the nominal model
   Mismatch mismatch_after;       // with the winner (equals mismatch when there is none)
   std::vector<ResidualTests> tests_before, tests_after;  // per recording, primary channel
@@ -175,6 +200,9 @@ class Explainer {
                                                           const std::string& /*candidate*/) {
     return std::nullopt;
   }
+  // Step 5's form check: the effect fitted to each recording alone, or nothing when the engine
+  // does not check this effect's form.
+  virtual std::vector<RecordingEstimate> per_recording_estimates(const std::string& /*effect*/) { return {}; }
   // Step 7: the detection threshold of each candidate against the model with `verdict` ("" =
   // nominal), and the experiment that would lower the largest (d.thresholds,
   // d.lowering_experiment). Nothing when the engine cannot compute them.
@@ -195,6 +223,11 @@ struct PipelineSettings {
   // A significant runner-up whose score reaches this share of the verdict's is ambiguous with it
   // when neither adds significantly on top of the other.
   double ambiguity_share = 0.5;
+  // Step 5: the verdict's form does not hold when its per-recording estimates spread by more than
+  // this share of their mean departure from "no effect" and by more than form_z of their
+  // standard deviations.
+  double form_spread = 0.5;
+  double form_z = 4.0;
 };
 
 // Runs the pipeline over `candidates` (names the explainer knows). An InputError propagates; any
@@ -227,6 +260,10 @@ std::string set_aside_reason(const EffectResult& effect, const SignificanceRule&
 // channel (d.channels) with what `settings` tolerates on it (fields of `d`).
 void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, const PipelineSettings& settings,
                        Diagnosis& d);
+
+// Step 5's rule on per-recording estimates (nullopt for fewer than two).
+std::optional<FormCheck> check_form(const std::string& effect, std::vector<RecordingEstimate> estimates,
+                                    const PipelineSettings& settings);
 
 // Verdict and reason from the ranked effects and the nominal residual figures: the first effect
 // when it is significant (returns true); else `none` when every level channel is ordinary

@@ -203,6 +203,15 @@ json to_json(const Diagnosis& d) {
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
            {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
            {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
+  if (d.form) {
+    json estimates = json::array();
+    for (const auto& e : d.form->estimates) {
+      estimates.push_back({{"recording", e.recording}, {"value", number(e.parameter.value)}, {"std", number(e.parameter.std)},
+                           {"departure", number(e.departure)}, {"departure_std", number(e.departure_std)}});
+    }
+    out["form"] = {{"effect", d.form->effect}, {"holds", d.form->holds},
+                   {"relative_spread", number(d.form->relative_spread)}, {"per_recording", estimates}};
+  }
   if (d.unexplained) {
     json models = json::array();
     for (const auto& m : d.unexplained->discrepancy) {
@@ -249,6 +258,11 @@ std::string text_summary(const Diagnosis& d) {
     s << "  " << c.name << ": nominal RMS " << fixed(c.rms, 3) << " mm, noise " << fixed(c.noise, 3) << " mm"
       << (c.tolerated > 0.0 ? ", tolerated " + fixed(c.tolerated, 3) + " mm" : std::string())
       << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
+  }
+  if (d.form && d.form->holds) {
+    s << d.form->effect << " fitted to each recording alone:";
+    for (const auto& e : d.form->estimates) s << "  " << e.recording << " " << format_estimate(e.parameter.value, e.parameter.std);
+    s << "  (one constant of the canal)\n";
   }
   if (d.unexplained) s << "where the unexplained residual lives: " << d.unexplained->summary << '\n';
   if (!d.thresholds.empty()) {

@@ -62,6 +62,10 @@ class Engine final : public Explainer {
                                                   const std::string& candidate) override;
   void detection_thresholds(const std::vector<std::string>& candidates, const std::string& verdict,
                             Diagnosis& d) override;
+  // A re-simulated effect (hydraulics, command) fitted to each recording alone by an engine of
+  // that recording; nothing for an effect of the readings, whose per-recording fit would take up
+  // the model's static error at each level (a constant offset is indistinguishable from it).
+  std::vector<RecordingEstimate> per_recording_estimates(const std::string& effect) override;
   // The engine of the same recordings whose nominal model carries `effects` (name, parameter).
   std::unique_ptr<Engine> with_effects(const std::vector<std::pair<std::string, double>>& effects) const;
   // The level channels every recording carries, among the compared ones.
