@@ -82,10 +82,10 @@ bool cost_is_the_grids(ReplayProblem& problem, TwiceTheCells& twice, const Run& 
 // a parameter at a bound (but the published law's, Parameter::low_is_published), a parameter not
 // determined or barely moving the recordings. Costs no simulation but the grid's: the Jacobian at
 // the run's last point is the one Levenberg–Marquardt took there. Measured on the benchmark's
-// clean 800-cell truth (bench/README.md, truth:1): the 100-cell run stopped at its 30 iterations
-// still creeping along the discharge coefficients' valley; a second start there took the
-// calibration from 716 to 1260 simulations, and the refined grids, continuing the first run,
-// reach the same optimum either way.
+// clean 800-cell truth (bench/README.md, truth:1): a 100-cell run that stops at its 30 iterations
+// still creeping along the discharge coefficients' valley and starts again there takes the
+// calibration to 1260 simulations against 716 when the refined grids continue the first run,
+// and both reach the same optimum.
 std::string doubt(ReplayProblem& problem, TwiceTheCells& twice, const Run& run, bool refinable) {
   const auto& params = problem.parameters();
   if (!std::isfinite(run.cost)) return "the first run found no usable solution";
@@ -265,9 +265,9 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     // A grid that may be refined scouts first: when twice the cells lower the cost at the scout's
     // end by enough that the refinement follows, the refined grid continues from there (its
     // optimum moves by more than this one's last precise iterations would). Measured on the
-    // benchmark's truth:1 (bench/README.md), the 100-cell run took 27 iterations (488
-    // simulations) to gain 5.6 % after its third, and the refined grids cut the cost 12-fold;
-    // it now stops after 13 (docs/calibration.md, "The first grid scouts").
+    // benchmark's truth:1 (bench/README.md), a 100-cell run to the precise tolerance takes 27
+    // iterations (488 simulations) to gain 5.6 % after its third, and the refined grids cut the
+    // cost 12-fold; the scout stops after 13 (docs/calibration.md, "The first grid scouts").
     const bool scouted = o.grid_check && static_cast<bool>(follows) && !from_coarser;
     Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, scouted ? kScoutTolerance : tolerance,
                                   /*secant=*/from_coarser != nullptr);

@@ -267,7 +267,7 @@ Run levenberg_marquardt(ReplayProblem& problem, std::vector<double> z, int max_i
     if (leaving.empty()) break;
     for (std::size_t j : leaving) {
       held[j] = false;
-      released[j] = true;  // from now on Ceres' projection keeps it within its bounds
+      released[j] = true;  // from here on Ceres' projection keeps it within its bounds
     }
   }
   return out;

@@ -285,9 +285,9 @@ int switches_on_sample_instants(const std::vector<double>& t, const std::vector<
 // starts the PRBS with its sampling) and commensurate with the sampling — the lab's 0.5 s clock
 // and 0.13 s samples meet every 6.5 s — puts a switch exactly on a sample instant wherever a
 // switch and a sample meet. The clock then sits at a corner of the feasible patch (those
-// switches bind it), not at its centre: the centre was 4 ms early on the lab, and the level below
-// the gate, which answers a gate move within a sample, was replayed 0.13 mm RMS off (0.03 mm at
-// the corner; the quantisation's 0.015). Which corner: a command is right-continuous — the sample
+// switches bind it), not at its centre: the centre is 4 ms early on the lab, and the level below
+// the gate, which answers a gate move within a sample, is then replayed 0.13 mm RMS off (0.03 mm
+// at the corner; the quantisation's 0.015). Which corner: a command is right-continuous — the sample
 // at a switch instant shows the new value (a PRBS bit floor(t / T); a control loop that logs the
 // command it applies at that tick) — so those switches fall on the sample that shows them, the
 // end t[k] of their interval. (A recorder that logs the command of the interval before would put

@@ -24,8 +24,7 @@ namespace canalsim::calibration {
 // estimates (100 cells; four 80 s recordings of the six-parameter truth): levels 0.05 s early
 // explain 0.38 of the cost, 0.1 s early or late 0.74 / 0.77, 0.3 s early or late 0.90 / 0.74.
 // With command and levels on one clock the scan's best (a delay of 0.009 s: the coarser grid's
-// dispersion) explains 0.038 on a 200-cell truth (0.082 at 0.014 s before the gate switched when
-// its command did, in truth and model; 0.035 and 0.043 on 400- and 800-cell truths then).
+// dispersion) explains 0.038 on a 200-cell truth.
 constexpr double kTimeOffsetGain = 0.15;
 
 struct TimeOffsetScan {

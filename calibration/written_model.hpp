@@ -4,7 +4,7 @@
 // that resolves it finely, are better reproduced by the grid-converged estimates
 // (discretisation.hpp grid_converged) on a finer grid. Measured on an independent-like truth of the
 // lab (1600 cells, minmod θ = 1.5, both gates' laws regularised near zero head) calibrated on 400
-// cells (the default set plus downstream_zero_head_mm; 2026-11-26): on five other recordings the
+// cells (the default set, with downstream_zero_head_mm): on five other recordings the
 // residual fell 4.9-20.9x with the grid-converged estimates on 800 cells, 7.9-27.5x on 1600.
 #pragma once
 
@@ -24,7 +24,7 @@ namespace canalsim::calibration {
 // estimates on twice the cells, though those may fit the fitted recordings a little better (they
 // are nearer that grid's optimum): they carry the grid error of the coarser grid into the finer
 // one, and on the truth above they left 4.5x on op1* where the grid-converged ones left 5.7x
-// (their cost on the four fitted recordings 0.0167 against 0.0171; 2026-11-25). Then restates the
+// (their cost on the four fitted recordings 0.0167 against 0.0171). Then restates the
 // "after" figures of every recording, fitted and validation, for it, and says so in
 // c.written_note. Leaves c as it is when the grid check did not run or the grid-converged
 // estimates equal the estimates. `parameters`, `replay`: those of the fit.

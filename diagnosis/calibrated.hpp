@@ -29,7 +29,7 @@ double calibration_uncertainty(const Effect& effect, const scenarios::Scenario& 
 // calibration leaves open for `added`, so that `added` is judged without it: a free discharge
 // coefficient takes up the discharge uncertainty that a leak is otherwise measured against (a
 // leak within three of those deviations could be the calibrated coefficient's own error, but
-// that error is now a parameter of the fit, and the leak's share of the flow, unlike the
+// in the joint fit that error is a parameter, and the leak's share of the flow, unlike the
 // coefficient's, shrinks as the gate opens). Measured: a 1.08 mm leak beside a coefficient of
 // 0.81 was refitted at 0.96 mm with the coefficient at 0.80, yet counted as within the
 // calibration's tolerance. Not an outflow: a share of the inflow taken from the pool trades with

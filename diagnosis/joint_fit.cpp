@@ -2,8 +2,8 @@
 // step 5). A candidate is fitted jointly with the effects found so far, all their parameters free:
 // effects that shift the levels alike (a leak, a discharge coefficient, a downstream gate, an
 // outflow, friction) trade off, and the one fitted alone first absorbs part of the other — a
-// leak of 2.7 mm with a downstream gate 1.5 mm lower was fitted as the downstream gate alone,
-// 4.2 mm lower, on which the leak then added nothing. Fitted jointly, the pair's signatures at
+// leak of 2.7 mm with a downstream gate 1.5 mm lower is fitted as the downstream gate alone,
+// 4.2 mm lower, on which the leak then adds nothing. Fitted jointly, the pair's signatures at
 // the several operating points separate them.
 //
 // The joint fit is Ceres Solver's bounded Levenberg–Marquardt (as the calibration's) on the
@@ -38,9 +38,10 @@ constexpr int kJointIterations = 15;
 
 // Forward-difference steps, as a share of each θ's catalog range. Every run ends a solver step at
 // every switch of the command (docs/gates.md), so the response is continuous in the parameters;
-// without that, the gate switched at the first step boundary after the command, the simulated cost
-// jittered by ~1 % between parameters 1 % of their range apart, and Levenberg–Marquardt stopped a
-// leak and a downstream gate at 3.9 and −0.7 mm (truth 2.5 and −1.5; now 2.50 and −1.52).
+// with a gate that switches at the first step boundary after the command, the simulated cost
+// jitters by ~1 % between parameters 1 % of their range apart, and Levenberg–Marquardt stops a
+// leak and a downstream gate at 3.9 and −0.7 mm (truth 2.5 and −1.5) where exact switching lets
+// it reach 2.50 and −1.52.
 constexpr double kStepShare = 0.02;
 
 // Joint fits predict the expected reading of a quantised level (Engine::Readings): a prediction

@@ -205,8 +205,8 @@ void cli_arguments_input(std::string_view bytes) {
 
   // Parsing, validation and requirements done, the application's parse-complete callback runs
   // before any subcommand's: it stops there. (Replacing the subcommands' callbacks instead would
-  // free the argument structs their options write into: the first version of this harness did,
-  // fuzz/regressions/cli_arguments/crash-26324df0...)
+  // free the argument structs their options write into; fuzz/regressions/cli_arguments/
+  // crash-26324df0... is the input that shows it.)
   struct ParsedOnly {};
   CLI::App app{"canalsim"};
   cli::add_all_commands(app);

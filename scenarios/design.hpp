@@ -22,9 +22,9 @@
 // whose one-sided end slopes extrapolate each pool's linear bed to its end, and the sill is the
 // higher of those two end beds. So y1 = the upstream pool's target depth (at x = L) and y3 = the
 // next pool's design depth at x = 0, both above the sill (no bed step on a continuous bed). For
-// the head gate y1 is the supply level. (Taking the sill at the end cells' centres instead, as an
-// earlier version did, shifted each drowned check's head by half a cell's bed drop on each side;
-// with heads of a few centimetres that moved canal 2's levels by up to 3 cm.)
+// the head gate y1 is the supply level. (Taking the sill at the end cells' centres instead would
+// shift each drowned check's head by half a cell's bed drop on each side; with heads of a few
+// centimetres that moves canal 2's levels by up to 3 cm.)
 //
 // Orifice offtakes: K = Q_design / (h_design − invert)^exponent, with h_design the profile depth at the
 // offtake's cell (at x = L, the target depth, for an offtake at the pool's end), so the outlet

@@ -1,6 +1,6 @@
 // One calibration of the default parameter set (cd_free, cd_submerged, manning_n,
-// downstream_opening_mm, offset_y_dw_mm, offset_y_dwe_mm) on four 255.5 s laboratory recordings
-// (op1–op4), as the library's CalibrateOptions run it (`canalsim calibrate --replay
+// downstream_opening_mm, downstream_zero_head_mm, offset_y_dw_mm, offset_y_dwe_mm) on four
+// 255.5 s laboratory recordings (op1–op4), as the library's CalibrateOptions run it (`canalsim calibrate --replay
 // recorded-upstream`; BM_CalibrateAsTheCommandLineDoes runs the command's defaults). The
 // recordings come from a truth the model cannot represent exactly: 1.5× the cells, minmod at
 // Courant 0.5, the six parameters perturbed, level noise 0.05 mm on the 0.05 mm quantisation.
@@ -118,7 +118,7 @@ BENCHMARK(BM_CalibrateWithGridRefinementOnAFineGridTruth)
 // physics differs where an independent simulator's would: its own regularisation of Swamee's law
 // near zero head (h0 = 4 mm, where the lab's head gate runs at op3/op4), discharge coefficients
 // 0.95 (free) and 0.97 (submerged), Manning n 0.014, the downstream gate 0.5 mm wider. The
-// nominal model sits ~2.1 mm off at op3/op4, as the issue measured for one.
+// nominal model sits ~2.1 mm off at op3/op4, as it does against an independent simulator of the lab.
 std::vector<Recording> clean_independent_recordings() {
   scenarios::Scenario truth = scenarios::builtin_scenario("lab");
   truth.pools.front().cells = 800;

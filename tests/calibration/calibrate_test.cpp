@@ -26,7 +26,7 @@ using scenarios::Scenario;
 // The nominal model: the laboratory canal as built in (100 cells, van Leer, Courant 0.8).
 Scenario model() { return scenarios::builtin_scenario("lab"); }
 
-// The model with the issue's six parameters perturbed at once.
+// The model with the six parameters of the acceptance test perturbed at once.
 Scenario six_perturbed() {
   Scenario s = model();
   s.head_gate->discharge_coefficient = 0.9;            // Cd free × 0.9
@@ -39,7 +39,7 @@ Scenario six_perturbed() {
   return s;
 }
 
-// The truth: the canal with the issue's six parameters perturbed, simulated on 200 cells (or
+// The truth: the canal with those six parameters perturbed, simulated on 200 cells (or
 // `cells_factor` × 100) with the minmod limiter at Courant 0.45; its sensors are applied by
 // realistic_levels() below.
 Scenario perturbed_truth(int cells_factor = 2) {
@@ -76,7 +76,7 @@ const std::vector<Recording>& truth_recordings() {
   return recs;
 }
 
-// The issue's six parameters, the ones six_perturbed() changes ...
+// The six parameters, the ones six_perturbed() changes ...
 const std::vector<std::string> kSixParameters = {"cd_free", "cd_submerged", "manning_n", "downstream_opening_mm",
                                                  "offset_y_dw_mm", "offset_y_dwe_mm"};
 
@@ -113,13 +113,13 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const ParameterEstimate& p = c.parameters[j];
     const double want = expected.at(p.name);
-    // The issue's bar: within 2 std — the std now holding the numerical uncertainty (the
+    // The acceptance bar: within 2 std — the std holding the numerical uncertainty (the
     // estimate re-made on other numerics) — and an informative std, not a vacuous one.
     EXPECT_LE(std::abs(p.value - want), 2.0 * p.std) << p.name << " = " << p.value << " ± " << p.std;
     EXPECT_LT(p.std, 0.2 * std::abs(want)) << p.name << " = " << p.value << " ± " << p.std;
     EXPECT_GT(p.grid_shift, p.statistical_std) << p.name << ": the model's form, not the noise, limits it";
-    // The model's own estimates meet the issue's bar, within 2 std and 5 %, but for the
-    // downstream level's offset: measured 2026-11-26 Cd free −0.9 %, Cd submerged −2.3 %, n
+    // The model's own estimates meet the acceptance bar, within 2 std and 5 %, but for the
+    // downstream level's offset: measured Cd free −0.9 %, Cd submerged −2.3 %, n
     // +0.7 %, opening +0.16 %, offsets +3.0 % and +6.6 % (of |truth|). That offset is 0.10 mm off,
     // half its std: the downstream level trades it against the downstream opening (Q ∝ a √h at
     // fixed Q gives dh/da = −2h/a, about −4 here: the opening's 0.03 mm is 0.1 mm of level), and
@@ -149,8 +149,8 @@ TEST(Calibrate, RecoversSixParametersPerturbedAtOnceFromAnotherSimulatorsNoisyRe
 // the level columns those of t + 0.3 s (they lead the command) or t − 0.3 s (they lag it). The
 // default set alone cannot follow it (measured: cost 0.93 / 0.98 against 0.033, Cd free 0.60 /
 // 0.39 for 0.9); the scan after the first fit finds it and the default set is fitted with
-// sensor_delay_s. Measured (2026-11-26, the gate switching when its command does in truth and
-// model; downstream_zero_head_mm in the default set): delay −0.295 ± 0.036 s and +0.317 ± 0.031
+// sensor_delay_s. Measured (the gate switching when its command does in truth and model;
+// downstream_zero_head_mm in the default set): delay −0.295 ± 0.036 s and +0.317 ± 0.031
 // s; roughness, opening and offsets within 1.1 %, 0.1 % and 3.4 %; the discharge-coefficient pair
 // along its valley (Cd free −4.3 % / −8.9 %, Cd submerged +5.1 % / +10.9 %: docs/calibration.md).
 // With the
@@ -200,11 +200,11 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   EXPECT_NE(c.time_offset_note.find("not fitted"), std::string::npos) << c.time_offset_note;
 }
 
-// The issue's bar met by the model's own estimates: the six parameters perturbed at once, the
+// The acceptance bar met by the model's own estimates: the six parameters perturbed at once, the
 // truth on four times the cells (minmod, Courant 0.45), realistic sensors, and recordings of 160 s
 // instead of 80 s, calibrated with grid refinement (at most two, as `canalsim calibrate` does):
 // 100 -> 200 -> 400 cells. The 80-s recordings above leave the downstream offset 6.6 % off; twice
-// the PRBS content separates it from the downstream opening. Measured 2026-11-27 (own estimate,
+// the PRBS content separates it from the downstream opening. Measured (own estimate,
 // in std): Cd free -3.0 % (0.7), Cd submerged +4.3 % (1.2), n +0.3 %, opening +0.08 %, offsets
 // -0.7 % and +1.6 %; the grid-converged ones within 4.2 %. The same on truths on twice and eight
 // times the cells: own estimates within 3.0 % and 3.2 % (docs/calibration.md, "What it achieves").
@@ -233,7 +233,7 @@ TEST(Calibrate, RecoversSixParametersWithin5PercentFromLongerRecordingsOfATruthO
 }
 
 // The grid-converged estimate on another truth: 400 cells. The model's own offset of y_dwe is
-// 7.0 % off there (measured 2026-11-26), the converged one 2.1 %; the other five parameters
+// 7.0 % off there (measured), the converged one 2.1 %; the other five parameters
 // converge within 5 % as well (the discharge-coefficient pair: own −3.1 % and +1.6 %, converged
 // +1.3 % and +0.4 %; the fit stops at a cost of 0.100, the grid's).
 TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTimesTheCells) {
@@ -243,9 +243,9 @@ TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTim
   const Calibration c = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 80.0), {}, o);
   ASSERT_TRUE(c.ok) << c.message;
   const std::map<std::string, double> expected = six_values(truth);
-  // The discharge-coefficient pair is named not identifiable (measured 2026-11-27: |correlation|
-  // 0.971); what these recordings determine is its combination (the issue: "named, with the
-  // combination that is determined instead"), which comes within 5 % (measured: 1.4 %, while
+  // The discharge-coefficient pair is named not identifiable (measured: |correlation| 0.971);
+  // what these recordings determine is its combination (the acceptance criterion: "named, with
+  // the combination that is determined instead"), which comes within 5 % (measured: 1.4 %, while
   // the pair itself slides along its valley to Cd free +9.8 %, Cd submerged −14.1 %).
   const auto is_cd = [](const std::string& name) { return name == "cd_free" || name == "cd_submerged"; };
   const std::size_t free = 0, submerged = 1;
@@ -267,7 +267,7 @@ TEST(Calibrate, TheGridConvergedEstimateCorrectsTheLevelOffsetsOnATruthOnFourTim
   }
 }
 
-// The issue's acceptance: after calibration, the residual on OTHER recordings of the canal (not
+// The acceptance criterion: after calibration, the residual on OTHER recordings of the canal (not
 // fitted) falls at least five-fold. Fitted on one submerged and one free-flow recording (op1,
 // op4); validated on op2 (submerged), op3 (free) and op5, which crosses the regime border.
 TEST(Calibrate, TheResidualOnOtherRecordingsOfAnIndependentTruthFallsFiveFold) {
@@ -302,7 +302,7 @@ Scenario offsets_on_four_times_the_cells() {
 // Grid refinement (CalibrateOptions::grid_refinements) on a truth made on four times the cells
 // (400, minmod, Courant 0.45), with nothing concealed but the sensors' offsets: the levels the
 // model's 100 cells compute differ from it by ~0.5 mm RMS at op1/op2 (the damped seiche), which
-// no parameter removes. The grid check finds the grid limits the fit (measured 2026-11-26: twice
+// no parameter removes. The grid check finds the grid limits the fit (measured: twice
 // the cells leave 0.28 of the cost), so the calibration runs again on 200 cells, from its
 // estimates, and the residual on a recording it did not fit falls further (measured: y_dw 0.35 ->
 // 0.18 mm, y_dwe 0.49 -> 0.19 mm on op2*); the "before" figures stay the scenario's.
@@ -357,8 +357,9 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   // Written as `canalsim calibrate` writes it, the model holds the grid-converged estimates on
   // twice the cells only when they fit the fitted recordings better than the estimates on their
   // own grid, and the note gives the costs compared. Here the two are within a hair of each other
-  // (measured: 0.0135 against 0.0128 on 2026-11-26; 0.0128 against 0.0128, the grid-converged
-  // model written, once the first grid's run became a scout), so either outcome obeys the rule;
+  // (measured: 0.0128 against 0.0128, the grid-converged model written; 0.0135 against 0.0128
+  // when the first grid runs to the precise tolerance instead of scouting), so either outcome
+  // obeys the rule;
   // both are checked. (tests/cli/calibrate_test.cpp ARefinedGridIsWrittenIntoTheCalibratedScenario sees
   // the grid-converged model written on a clear case.)
   o.write_grid_converged = true;
@@ -575,10 +576,10 @@ TEST(Calibrate, EstimatesStayWithinTheirBounds) {
 // A parameter whose optimum lies at its bound — the downstream gate's zero-head regularisation,
 // 0 (Swamee's published law) in the truth — is held there once a step puts it on the bound, and
 // the others are fitted without it (levenberg_marquardt.cpp StopOnReachingABound). Held at 0 it
-// is the six-parameter model, so the fit must reach that model's optimum. Measured 2026-11-26:
-// cost 0.032746 in 228 simulations against the six parameters' 0.032898 in 132; before the hold,
-// Ceres alone projected every step onto the bound and crept: 420 simulations, 24 iterations, and
-// it stopped 11 % above the optimum (0.036460, Cd submerged 1.003 for the truth's 1.1).
+// is the six-parameter model, so the fit must reach that model's optimum. Measured: cost
+// 0.032746 in 228 simulations against the six parameters' 0.032898 in 132; without the hold,
+// Ceres alone projects every step onto the bound and creeps: 420 simulations, 24 iterations, and
+// it stops 11 % above the optimum (0.036460, Cd submerged 1.003 for the truth's 1.1).
 TEST(Calibrate, AParameterWhoseOptimumIsAtItsBoundIsHeldThere) {
   CalibrateOptions o;
   o.parameters = kSixParameters;
@@ -697,8 +698,8 @@ TEST(Calibrate, FurtherStartsRunWhenTheFirstOptimumIsDoubtful) {
 // bring its cost below the doubt threshold — is continued by the refined grid, not restarted on
 // this one: one start. Where no refinement follows, the same run is doubtful and the second start
 // runs. (On the benchmark's clean 800-cell truth the 100-cell run stops at its 30 iterations
-// creeping along the discharge coefficients' valley; restarting it took 1260 simulations, against
-// 716 now, for the same optimum: bench/README.md.)
+// creeping along the discharge coefficients' valley; restarting it takes 1260 simulations,
+// continuing it on the refined grid 716, for the same optimum: bench/README.md.)
 TEST(Calibrate, ARunStoppedAtItsIterationLimitIsContinuedByTheRefinedGrid) {
   const Scenario truth = offsets_on_four_times_the_cells();
   const std::vector<Recording> fitted = record(truth, {"op1", "op4"}, 60.0);

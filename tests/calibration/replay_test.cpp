@@ -68,7 +68,7 @@ void sampled_clocked_command(double period, double phase, std::vector<double>& t
 
 // The lab's 0.5 s clock started with the 0.13 s samples: every 6.5 s a switch falls on a sample
 // instant, and the clock is found exactly — not at the centre of the clocks consistent with the
-// samples, 5 ms early (replayed, the level below the gate was 0.13 mm RMS off for it).
+// samples, 5 ms early (replayed there, the level below the gate is 0.13 mm RMS off).
 TEST(Replay, AClockStartedWithTheSamplesIsFoundExactly) {
   std::vector<double> t, u;
   sampled_clocked_command(0.5, 0.0, t, u);

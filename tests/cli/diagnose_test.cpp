@@ -42,8 +42,8 @@ TEST(Diagnose, AnUnknownModelOrAMissingRecordingIsOneErrorLineAndWritesNoJson) {
   fs::remove_all(scratch);
 }
 
-// The first problem is reported, naming the file and line; the second file's problem (and the
-// "no recordings given" that used to follow from the first) are not printed.
+// The first problem is reported, naming the file and line; the second file's problem (and a
+// "no recordings given" that would follow from the first) are not printed.
 TEST(Diagnose, TwoBadRecordingsGiveOneLineNamingTheFirstFileAndLine) {
   const fs::path scratch = scratch_dir("diagnose_two_bad");
   std::ofstream(scratch / "bad1.csv") << "t_s,u_mm,y_dwe_mm\n0,20,45\n0.13,abc,45\n";

@@ -1,5 +1,5 @@
-// What an adversarial user found: outputs destroyed by failing runs, runs that hang in
-// silence, NaN printed with exit status 0. Each test fails on the code before the fix.
+// Adversarial use: a failing run must not destroy outputs, a run must not hang in silence, and
+// NaN must not be printed with exit status 0.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -48,8 +48,8 @@ TEST(RecordingLimits, AHugeFieldIsNotEchoedWhole) {
   }
 }
 
-// A scenario named "a\nb" used to write "# scenario: a" and a line "b" that the reader took for
-// the header.
+// A scenario named "a\nb" must not write "# scenario: a" and a line "b" that the reader would take
+// for the header.
 TEST(RecordingLimits, LineBreaksInMetadataAreWrittenAsSpaces) {
   canalsim::Recording rec = parse_recording(rows("51"), "r.csv");
   rec.set_meta("scenario", "two\nlines\r\nhere");

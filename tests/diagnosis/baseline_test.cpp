@@ -102,7 +102,7 @@ TEST(Baseline, CalibratedDiagnosisNamesAConcealedDelayAndCalibrationRemovesTheFa
 // gate and the downstream gate 1 mm lower. Both raise the levels, so each alone explains much of
 // the other's residual; the verdict fitted alone absorbs part of the second effect, which then
 // adds only what the first leaves. The joint fit (pipeline step 5) must name both, each within
-// the blind test's 25 %, with their jointly refitted parameters. Measured (2026-11-24): 2.13 and
+// the blind test's 25 %, with their jointly refitted parameters. Measured: 2.13 and
 // −0.951 mm; the pairs 1.0/−1.0, 1.5/−1.5 and 2.5/−0.7 mm pass too, 0.8/−0.6 mm names the gate
 // only; on two recordings (op2, op4) instead of four the leak came out 28 % high.
 TEST(Baseline, TwoEffectsConcealedInAnotherTruthAreBothNamedWithTheirJointParameters) {

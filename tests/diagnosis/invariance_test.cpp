@@ -133,8 +133,8 @@ double named_estimate(const Diagnosis& d) {
 }
 
 // With the gate position recorded the speed is read off it; from the levels alone it is fitted by
-// re-simulating (a scan of speeds and a golden-section search; the secant it replaced stopped at
-// 5.18 mm/s for 3 here).
+// re-simulating (a scan of speeds and a golden-section search; a secant search stops at 5.18 mm/s
+// for 3 here).
 void expect_scenario_invariance(bool gate_position) {
   std::vector<double> estimates;
   for (const Variant& v : variants({"op1", "op3"}, gate_position)) {

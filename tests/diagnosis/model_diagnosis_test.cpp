@@ -70,8 +70,8 @@ TEST(ModelDiagnosis, CleanRecordingsOfTheModelItselfNameNoEffect) {
 }
 
 // Real level sensors have offsets: a 0.3 mm lattice through 0.11 mm (not through zero) must be
-// found as well as one through zero, with its step (the old search divided the levels by the
-// step and so saw a lattice only through zero).
+// found as well as one through zero, with its step (a search that divides the levels by the step
+// sees a lattice only through zero).
 TEST(ModelDiagnosis, ACoarseLatticeIsNamedWhateverItsOffset) {
   for (double origin : {0.0, 0.11, -0.23}) {
     SyntheticSpec spec = two_periods();

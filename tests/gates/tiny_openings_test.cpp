@@ -1,5 +1,5 @@
 // The gate laws stay finite for every opening in their documented range, down to openings that
-// round to zero (a command of 1e-320 mm): the law's 1/a terms used to overflow to inf and NaN.
+// round to zero (a command of 1e-320 mm), where the law's 1/a terms could overflow to inf and NaN.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -375,8 +375,8 @@ TEST(LabCanal, StaticGainWithTheMinmodLimiterMatchesNeighbouringSteadyStates) {
 }
 
 // On 400 cells Newton stalls at minmod's kinks (docs/numerics.md): the operating point is then
-// the stall, accepted as an experiment's start is, where `canalsim linearize` used to stop with
-// "no steady state at the operating point". Measured 2026-11-27: gain 0.523904 against van
+// the stall, accepted as an experiment's start is, rather than a failure ("no steady state at the
+// operating point"). Measured: gain 0.523904 against van
 // Leer's 0.523833 on the same grid (the two limiters differ by O(dx²) in smooth flow).
 TEST(LabCanal, LinearisesMinmodOnAFineGridAtItsStalledSteadyState) {
   scenarios::Scenario lab = scenarios::builtin_scenario("lab");

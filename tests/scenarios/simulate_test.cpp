@@ -151,8 +151,8 @@ void expect_same_levels_and_discharge(const Recording& a, const Recording& b) {
 
 // With minmod on 400 cells Newton stalls at the limiter's kinks (docs/numerics.md). The stall is
 // accepted when it is as settled as the march that would replace it, and the recording it starts
-// must be the one that march starts — before the input begins: until 2026-11-27 a continuation
-// retry marched under the PRBS's first commands, and op1 started at 0.61 L/s instead of 0.476.
+// must be the one that march starts — before the input begins: a continuation retry that marched
+// under the PRBS's first commands would start op1 at 0.61 L/s instead of 0.476.
 // Measured: the two recordings differ by at most 2.4e-6 mm (y_dwe) and 2.4e-8 L/s.
 TEST(Simulate, AStalledSteadyStateStartsWhereTheMarchWould) {
   Scenario lab = builtin_scenario("lab");
@@ -260,7 +260,7 @@ TEST(Simulate, DriveRecordingIsReplayed) {
 // The gate leaves when its command does: with the constant-speed actuator of eq. (16), the
 // opening a sample after a step of the command that falls between samples (and between solver
 // steps) is the operating opening plus speed × elapsed time, exactly, and before it, unmoved.
-// A gate that switched at the first solver step after the command (as before) would lag by up to
+// A gate that switched at the first solver step after the command would lag by up to
 // a step: 40 ms on the lab's 100 cells, 0.2 mm of travel here.
 TEST(Simulate, AGateDrivenThroughItsActuatorLeavesWhenItsCommandSteps) {
   Scenario lab = builtin_scenario("lab");
