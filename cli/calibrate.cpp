@@ -14,6 +14,7 @@
 #include "calibration/report.hpp"
 #include "calibration/scenario_file.hpp"
 #include "cli/checks.hpp"
+#include "cli/recording_format.hpp"
 #include "cli/commands.hpp"
 #include "core/declared_units.hpp"
 #include "diagnosis/baseline.hpp"
@@ -39,6 +40,7 @@ struct CalibrateArguments {
   bool keep_grid = false;
   bool allow_long = false;
   std::string replay = "diagnosis";
+  RecordingFormat format;
 };
 
 // The scenario's TOML text: the built-in's, or the file's.
@@ -50,9 +52,9 @@ std::string scenario_text(const std::string& name_or_path) {
 }
 
 // In millimetres: a command logged in counts (# u_unit, # u_scale_mm_per_unit) is converted here.
-std::vector<Recording> read_all(const std::vector<std::string>& files) {
+std::vector<Recording> read_all(const std::vector<std::string>& files, const RecordingFormat& format) {
   std::vector<Recording> out;
-  for (const auto& f : files) out.push_back(in_millimetres(read_recording(f)));
+  for (const auto& f : files) out.push_back(in_millimetres(format.read(f)));
   return out;
 }
 
@@ -171,8 +173,8 @@ int run(const CalibrateArguments& args) {
   check_outputs({{"-o", args.out}, {"--json", args.json}, {"--report", args.report}}, inputs);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   const std::string text = scenario_text(args.scenario);
-  const std::vector<Recording> recordings = read_all(args.recordings);
-  const std::vector<Recording> validation = read_all(args.validation);
+  const std::vector<Recording> recordings = read_all(args.recordings, args.format);
+  const std::vector<Recording> validation = read_all(args.validation, args.format);
   if (args.replay == "recorded-upstream") {
     for (const auto* set : {&recordings, &validation}) {
       for (const Recording& r : *set) {
@@ -250,6 +252,7 @@ void add_calibrate_command(CLI::App& app) {
       ->check(CLI::IsMember({"swamee", "simple"}));
   cmd->add_option("--validate", args->validation, "Recordings to check the calibration on, not fitted");
   cmd->add_option("--json", args->json, "Write the calibration as JSON");
+  args->format.add_options(cmd);
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
   cmd->add_option("--threads", args->threads, "Simulations in parallel (default 2)")->check(thread_count());
   cmd->add_option("--starts", args->starts, "Levenberg-Marquardt starts (default 2)")->check(integer_in(1, 10, "a number of starts"));

@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "cli/checks.hpp"
+#include "cli/recording_format.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "core/declared_units.hpp"
@@ -46,21 +47,22 @@ struct DiagnoseArguments {
   bool no_clock = false;
   bool allow_long = false;
   std::vector<std::string> flags_given;  // the flags the user typed, for check_flags_apply
+  RecordingFormat format;
 };
 
 // Stops at the first unreadable recording: its error names the file and line, and the next
 // file's problem (or a "no recordings" that only follows from the first) would be noise.
-std::vector<Recording> read_all(const std::vector<std::string>& files) {
+std::vector<Recording> read_all(const std::vector<std::string>& files, const RecordingFormat& format) {
   std::vector<Recording> recordings;
-  for (const auto& file : files) recordings.push_back(read_recording(file));
+  for (const auto& file : files) recordings.push_back(format.read(file));
   return recordings;
 }
 
 // For a scenario, in millimetres: a command or levels logged in other units (# u_unit,
 // # u_scale_mm_per_unit; docs/recording-format.md) are converted here, so every check sees mm.
 // (A reduced model keeps the declared units: it reports its gain in them.)
-std::vector<Recording> read_all_in_mm(const std::vector<std::string>& files) {
-  std::vector<Recording> recordings = read_all(files);
+std::vector<Recording> read_all_in_mm(const std::vector<std::string>& files, const RecordingFormat& format) {
+  std::vector<Recording> recordings = read_all(files, format);
   for (Recording& r : recordings) r = in_millimetres(std::move(r));
   return recordings;
 }
@@ -104,7 +106,7 @@ int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, 
 }
 
 int run_model(const DiagnoseArguments& args) {
-  const std::vector<Recording> recordings = read_all(args.recordings);
+  const std::vector<Recording> recordings = read_all(args.recordings, args.format);
   diagnosis::ModelDiagnoseOptions options;
   options.kind = reduced::require_model_kind(args.model);
   // --upstream-level stands in for a missing y_up_mm column of a model that uses the level.
@@ -176,7 +178,7 @@ diagnosis::DiagnoseOptions diagnose_options(const DiagnoseArguments& args) {
 // against the calibrated scenario. Every check (baseline against recordings, both against the
 // scenario) runs before the calibration, and nothing is written unless both steps succeed.
 int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>& recordings, const DiagnoseArguments& args) {
-  const std::vector<Recording> baseline = read_all_in_mm(args.baseline);
+  const std::vector<Recording> baseline = read_all_in_mm(args.baseline, args.format);
   check_recorded_upstream(baseline, args);
   if (const auto problems = diagnosis::check_baseline(baseline, recordings); !problems.empty()) {
     throw InputError(problems.front());
@@ -234,7 +236,7 @@ int run(const DiagnoseArguments& args) {
   if (!args.model.empty()) return run_model(args);
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   // One line for the first problem (it names the recording); the user reruns to see the next.
-  const std::vector<Recording> recordings = read_all_in_mm(args.recordings);
+  const std::vector<Recording> recordings = read_all_in_mm(args.recordings, args.format);
   check_recorded_upstream(recordings, args);
   if (const auto problems = diagnosis::check_recordings(s, recordings); !problems.empty()) {
     throw InputError(problems.front() + " (scenario " + s.name + ")");
@@ -271,6 +273,7 @@ void add_diagnose_command(CLI::App& app) {
                   "--scenario: calibrate the scenario on these clean recordings first, then diagnose the others "
                   "against it; ends at the next option or -- (--baseline B1.csv B2.csv -- R1.csv R2.csv)");
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
+  args->format.add_options(cmd);
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
   cmd->add_option("--candidates", args->candidates, "Catalog effects to try, e.g. gate_leakage sensor_offset[y_dwe_mm]; a per-channel effect without [CHANNEL] is tried on every level channel (default: all; docs/diagnosis.md, section 4)");
   cmd->add_option("--fit-fraction", args->fit_fraction, "Leading share of each recording used for fitting (default 0.5)")

@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "cli/checks.hpp"
+#include "cli/recording_format.hpp"
+#include "core/format.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "cli/freq_check.hpp"
@@ -49,13 +51,9 @@ struct FitArguments {
   std::string start;   // NAME=V,...
   std::string freq_check;  // scenario the recordings were simulated from
   bool allow_long = false;
+  RecordingFormat format;
 };
 
-std::string fixed(double v, int digits) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
-  return buffer;
-}
 
 std::string basename_of(const std::string& path) {
   const auto slash = path.find_last_of('/');
@@ -286,43 +284,51 @@ void print_table(const std::string& title, const std::vector<std::string>& names
 // say so rather than print "inf%" (the study's markdown tables write "∞ (nominal 0)").
 std::string uncertainty_text(double dp, double nominal) {
   if (nominal == 0.0 || !std::isfinite(dp)) return "undefined (nominal 0)";
-  return fixed(100.0 * dp, 2) + "%";
+  return format_fixed(100.0 * dp, 2) + "%";
 }
 
-void run_fit(const FitArguments& args) {
-  std::vector<NamedFile> inputs = named_files("recording", args.recordings);
-  inputs.push_back({"--freq-check", args.freq_check});
-  check_outputs({{"--json", args.json}}, inputs);  // written after all the fits
-  const ModelKind kind = require_model_kind(args.model);
+// The fits of one run: one per recording and, with --nominal, one over all of them, each with
+// its gamma sweep when --gamma asked for one.
+struct Fits {
+  std::vector<FitResult> each;
+  std::vector<GammaSweep> sweeps;
+  std::optional<FitResult> nominal;
+  std::optional<GammaSweep> nominal_sweep;
+};
+
+std::vector<std::size_t> every_index(std::size_t n) {
+  std::vector<std::size_t> all(n);
+  for (std::size_t j = 0; j < n; ++j) all[j] = j;
+  return all;
+}
+
+// --gamma's grid, refused for a model without gamma; --memory checked.
+std::optional<GammaGrid> gamma_grid(const FitArguments& args, ModelKind kind) {
   std::optional<GammaGrid> grid;
   if (!args.gamma.empty()) {
     grid = GammaGrid::parse(args.gamma);
     if (!uses_gamma(kind)) {
       throw InputError("--gamma: model " + model_name(kind) +
-                       " has no gamma (the sweep applies to nliom-f, nlfom-f, nliom-s, nlfom-s, "
-                       "hybrid)");
+                       " has no gamma (the sweep applies to nliom-f, nlfom-f, nliom-s, nlfom-s, hybrid)");
     }
   }
-  if (args.memory != "short" && args.memory != "full") {
-    throw InputError("--memory " + args.memory + ": expected short or full");
-  }
-  // --freq-check: the scenario and each recording's experiment, before any fit.
-  std::optional<scenarios::Scenario> check_scenario;
-  std::vector<const scenarios::ExperimentSpec*> check_experiments;
-  if (!args.freq_check.empty()) {
-    check_scenario = scenarios::load_scenario_or_builtin(args.freq_check);
-    check_experiments = freq_check_experiments(*check_scenario, args.recordings);
-  }
+  if (args.memory != "short" && args.memory != "full") throw InputError("--memory " + args.memory + ": expected short or full");
+  return grid;
+}
+
+std::vector<ExperimentData> read_experiments(const FitArguments& args, ModelKind kind) {
   DataOptions data_options;
   data_options.upstream_level_mm = args.upstream_level_mm;
   std::vector<ExperimentData> data;
   for (const auto& file : args.recordings) {
-    data.push_back(load_experiment(file, data_options));
+    data.push_back(prepare_data(args.format.read(file), data_options));
     if (uses_upstream_level(kind)) require_upstream_level(data.back(), model_name(kind));
   }
   require_upstream_level_used(args.upstream_level_mm, data, "fit");
+  return data;
+}
 
-  ProgressLine progress("canalsim fit");
+FitOptions fit_options(const FitArguments& args, ModelKind kind, ProgressLine& progress) {
   FitOptions options;
   options.actuation.quantum_mm = args.quantum_mm;
   options.actuation.gate_speed_mm_s = args.gate_speed_mm_s;
@@ -335,91 +341,88 @@ void run_fit(const FitArguments& args) {
   if (const Status status = options.validate(); !status) {
     throw InputError((args.bounds.empty() && args.start.empty() ? "" : "--bounds/--start: ") + status.message());
   }
-  check_fit_cost(kind, data, options, grid, args);
+  return options;
+}
 
-  // Per-recording fits.
-  std::vector<FitResult> fits;
-  std::vector<GammaSweep> sweeps;
+Fits fit_all(ModelKind kind, const std::vector<ExperimentData>& data, const FitOptions& options,
+             const std::optional<GammaGrid>& grid, bool with_nominal, ProgressLine& progress) {
+  Fits f;
   if (grid) {
-    for (std::size_t j = 0; j < data.size(); ++j) {
-      sweeps.push_back(gamma_sweep(kind, {data[j]}, options, *grid));
-      fits.push_back(sweeps.back().best_fit);
-      progress.report({-1.0, "gamma sweep done for " + data[j].source});
+    for (const auto& experiment : data) {
+      f.sweeps.push_back(gamma_sweep(kind, {experiment}, options, *grid));
+      f.each.push_back(f.sweeps.back().best_fit);
+      progress.report({-1.0, "gamma sweep done for " + experiment.source});
     }
   } else {
-    fits = fit_each(kind, data, options);
+    f.each = fit_each(kind, data, options);
   }
-  std::optional<FitResult> nominal;
-  std::optional<GammaSweep> nominal_sweep;
-  if (args.nominal) {
+  if (with_nominal) {
     if (grid) {
-      nominal_sweep = gamma_sweep(kind, data, options, *grid);
-      nominal = nominal_sweep->best_fit;
+      f.nominal_sweep = gamma_sweep(kind, data, options, *grid);
+      f.nominal = f.nominal_sweep->best_fit;
     } else {
-      nominal = fit_nominal(kind, data, options);
+      f.nominal = fit_nominal(kind, data, options);
     }
     progress.report({-1.0, "nominal model done"});
   }
+  return f;
+}
 
-  // Nothing is printed unless every figure is a number and every model follows its recording.
-  for (std::size_t j = 0; j < fits.size(); ++j) {
-    require_model_follows(fits[j], "fit of " + model_name(kind) + " to " + fits[j].sources.front());
-    require_finite_figures(fit_json(fits[j], data, {j}), "fit of " + model_name(kind) + " to " + fits[j].sources.front());
+// Nothing is printed unless every figure is a number and every model follows its recording; a
+// parameter at its bound is a warning.
+void require_printable(const Fits& f, ModelKind kind, const std::vector<ExperimentData>& data, const FitOptions& options,
+                       ProgressLine& progress) {
+  for (std::size_t j = 0; j < f.each.size(); ++j) {
+    require_model_follows(f.each[j], "fit of " + model_name(kind) + " to " + f.each[j].sources.front());
+    require_finite_figures(fit_json(f.each[j], data, {j}), "fit of " + model_name(kind) + " to " + f.each[j].sources.front());
   }
-  if (nominal) require_model_follows(*nominal, "nominal fit of " + model_name(kind));
+  if (f.nominal) require_model_follows(*f.nominal, "nominal fit of " + model_name(kind));
   progress.finish();
-  for (const auto& f : fits) warn_about_bounds(f, options, "fit of " + model_name(kind) + " to " + f.sources.front());
-  if (nominal) warn_about_bounds(*nominal, options, "nominal fit of " + model_name(kind));
-  if (nominal) {
-    std::vector<std::size_t> all(data.size());
-    for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
-    require_finite_figures(fit_json(*nominal, data, all), "nominal fit of " + model_name(kind));
+  for (const auto& fit : f.each) warn_about_bounds(fit, options, "fit of " + model_name(kind) + " to " + fit.sources.front());
+  if (f.nominal) {
+    warn_about_bounds(*f.nominal, options, "nominal fit of " + model_name(kind));
+    require_finite_figures(fit_json(*f.nominal, data, every_index(data.size())), "nominal fit of " + model_name(kind));
   }
+}
 
-  // Table.
+// The per-recording table, and with a nominal model its table and the uncertainty indices
+// (eq. 22), which it returns.
+std::map<std::string, double> print_fits(const FitArguments& args, ModelKind kind, const Fits& f,
+                                         const std::vector<ExperimentData>& data, const std::optional<GammaGrid>& grid) {
   const auto names = parameter_names(kind);
   std::vector<TableRow> rows;
   const auto labels = recording_labels(args.recordings);
-  for (std::size_t j = 0; j < fits.size(); ++j) {
-    rows.push_back({labels[j], &fits[j], declared_gain_factor(data[j])});
-  }
+  for (std::size_t j = 0; j < f.each.size(); ++j) rows.push_back({labels[j], &f.each[j], declared_gain_factor(data[j])});
   const std::string criterion = args.criterion == "iae" ? "IAE fit" : "IAE fit polished by least squares";
   print_table(model_name(kind) + " fits (" + criterion + "; " + gain_unit_text(kind, data) + ", IAE in mm s, Nrmse eq. 19" +
                   (grid ? ", gamma by best Nrmse over " + args.gamma : std::string()) + ")",
               names, rows);
   std::map<std::string, double> dp;
-  if (nominal) {
-    std::vector<FitResult> per(nominal->sources.size());
-    std::vector<TableRow> nominal_rows;
-    for (std::size_t j = 0; j < per.size(); ++j) {
-      per[j].model = nominal->model;
-      per[j].iae = {nominal->iae[j]};
-      per[j].nrmse = {nominal->nrmse[j]};
-      per[j].converged = nominal->converged;
-      per[j].message = nominal->message;
-    }
-    for (std::size_t j = 0; j < per.size(); ++j) {
-      nominal_rows.push_back({"nominal @ " + labels[j], &per[j], declared_gain_factor(data[j])});
-    }
-    print_table("nominal model (minimises IAE_c, eq. 21; IAE_c = " + fixed(nominal->iae_total, 4) +
-                    ")",
-                names, nominal_rows);
-    std::vector<Model> models;
-    for (const auto& f : fits) models.push_back(f.model);
-    dp = uncertainty_indices(models, nominal->model);
-    std::cout << "  uncertainty index dp (eq. 22):";
-    for (const auto& n : names) {
-      std::cout << "  " << n << " " << uncertainty_text(dp[n], get_parameter(nominal->model.p, n));
-    }
-    std::cout << "\n";
+  if (!f.nominal) return dp;
+  std::vector<FitResult> per(f.nominal->sources.size());
+  std::vector<TableRow> nominal_rows;
+  for (std::size_t j = 0; j < per.size(); ++j) {
+    per[j].model = f.nominal->model;
+    per[j].iae = {f.nominal->iae[j]};
+    per[j].nrmse = {f.nominal->nrmse[j]};
+    per[j].converged = f.nominal->converged;
+    per[j].message = f.nominal->message;
+    nominal_rows.push_back({"nominal @ " + labels[j], &per[j], declared_gain_factor(data[j])});
   }
+  print_table("nominal model (minimises IAE_c, eq. 21; IAE_c = " + format_fixed(f.nominal->iae_total, 4) + ")", names,
+              nominal_rows);
+  std::vector<Model> models;
+  for (const auto& fit : f.each) models.push_back(fit.model);
+  dp = uncertainty_indices(models, f.nominal->model);
+  std::cout << "  uncertainty index dp (eq. 22):";
+  for (const auto& n : names) std::cout << "  " << n << " " << uncertainty_text(dp[n], get_parameter(f.nominal->model.p, n));
+  std::cout << "\n";
+  return dp;
+}
 
-  nlohmann::json freq_check;
-  if (check_scenario) freq_check = print_freq_check(*check_scenario, check_experiments, fits, data);
-
-  if (args.json.empty()) return;
+nlohmann::json fits_json(const FitArguments& args, ModelKind kind, const Fits& f, const std::vector<ExperimentData>& data,
+                         const std::optional<GammaGrid>& grid, const std::map<std::string, double>& dp) {
   nlohmann::json out;
-  if (check_scenario) out["freq_check"] = freq_check;
   out["model"] = model_name(kind);
   out["options"] = {{"quantum_mm", args.quantum_mm},
                     {"gate_speed_mm_s", args.gate_speed_mm_s},
@@ -427,23 +430,51 @@ void run_fit(const FitArguments& args) {
                     {"gl_memory_terms", args.memory_terms},
                     {"cost", "IAE (eq. 20); nominal IAE_c (eq. 21)"}};
   if (grid) out["options"]["gamma_grid"] = {grid->first, grid->last, grid->step};
-  nlohmann::json fits_json = nlohmann::json::array();
-  for (std::size_t j = 0; j < fits.size(); ++j) {
-    auto f = fit_json(fits[j], data, {j});
-    if (grid) f["gamma_sweep"] = {{"gamma", sweeps[j].gamma}, {"nrmse", sweeps[j].nrmse}, {"iae", sweeps[j].iae}};
-    fits_json.push_back(std::move(f));
+  nlohmann::json each = nlohmann::json::array();
+  for (std::size_t j = 0; j < f.each.size(); ++j) {
+    auto fit = fit_json(f.each[j], data, {j});
+    if (grid) fit["gamma_sweep"] = {{"gamma", f.sweeps[j].gamma}, {"nrmse", f.sweeps[j].nrmse}, {"iae", f.sweeps[j].iae}};
+    each.push_back(std::move(fit));
   }
-  out["fits"] = fits_json;
-  if (nominal) {
-    std::vector<std::size_t> all(data.size());
-    for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
-    auto n = fit_json(*nominal, data, all);
-    if (nominal_sweep) {
-      n["gamma_sweep"] = {{"gamma", nominal_sweep->gamma}, {"nrmse", nominal_sweep->nrmse}, {"iae", nominal_sweep->iae}};
+  out["fits"] = each;
+  if (f.nominal) {
+    auto n = fit_json(*f.nominal, data, every_index(data.size()));
+    if (f.nominal_sweep) {
+      n["gamma_sweep"] = {{"gamma", f.nominal_sweep->gamma}, {"nrmse", f.nominal_sweep->nrmse}, {"iae", f.nominal_sweep->iae}};
     }
     out["nominal"] = n;
     out["uncertainty_index"] = dp;
   }
+  return out;
+}
+
+void run_fit(const FitArguments& args) {
+  std::vector<NamedFile> inputs = named_files("recording", args.recordings);
+  inputs.push_back({"--freq-check", args.freq_check});
+  check_outputs({{"--json", args.json}}, inputs);  // written after all the fits
+  const ModelKind kind = require_model_kind(args.model);
+  const std::optional<GammaGrid> grid = gamma_grid(args, kind);
+  // --freq-check: the scenario and each recording's experiment, before any fit.
+  std::optional<scenarios::Scenario> check_scenario;
+  std::vector<const scenarios::ExperimentSpec*> check_experiments;
+  if (!args.freq_check.empty()) {
+    check_scenario = scenarios::load_scenario_or_builtin(args.freq_check);
+    check_experiments = freq_check_experiments(*check_scenario, args.recordings);
+  }
+  const std::vector<ExperimentData> data = read_experiments(args, kind);
+
+  ProgressLine progress("canalsim fit");
+  const FitOptions options = fit_options(args, kind, progress);
+  check_fit_cost(kind, data, options, grid, args);
+  const Fits fits = fit_all(kind, data, options, grid, args.nominal, progress);
+  require_printable(fits, kind, data, options, progress);
+  const std::map<std::string, double> dp = print_fits(args, kind, fits, data, grid);
+  nlohmann::json freq_check;
+  if (check_scenario) freq_check = print_freq_check(*check_scenario, check_experiments, fits.each, data);
+
+  if (args.json.empty()) return;
+  nlohmann::json out = fits_json(args, kind, fits, data, grid, dp);
+  if (check_scenario) out["freq_check"] = freq_check;
   write_file_atomically(args.json, out.dump(1) + "\n");
   std::cout << "wrote " << args.json << "\n";
 }
@@ -464,6 +495,7 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--gamma", args->gamma,
                   "Sweep gamma over first:last:step (e.g. 0:10:0.05) and keep the best Nrmse");
   cmd->add_option("--json", args->json, "Write parameters, IAE, Nrmse and responses as JSON");
+  args->format.add_options(cmd);
   // Flag values are checked here so that errors name the flag, not the library's option field.
   cmd->add_option("--upstream-level", args->upstream_level_mm,
                   "Constant upstream level in mm for recordings without y_up_mm")

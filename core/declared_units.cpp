@@ -22,6 +22,9 @@ DeclaredUnit declared_unit(const Recording& rec, const std::string& which) {
   const std::string unit = rec.meta(unit_key);
   const std::optional<double> scale = metadata_number(rec, scale_key);
   if (!scale) {
+    // Length units every logger may name without a scale.
+    if (unit == "m") return {unit, 1000.0};
+    if (unit == "cm") return {unit, 10.0};
     if (!unit.empty() && unit != "mm") {
       throw InputError(source + ": metadata " + unit_key + ": " + unit + " needs " + scale_key + " (how many mm one " +
                        unit + " is, e.g. # " + scale_key + ": 0.13)");

@@ -28,6 +28,27 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   throw InputError(source + ":" + std::to_string(line) + ": " + what);
 }
 
+// The header read with canalsim's names where the file has its own (RecordingReadOptions::
+// column_names): each named column must be in the header, and canalsim's name must not be there
+// as well (which of the two to read would be a guess).
+void rename_columns(Recording& rec, const std::map<std::string, std::string>& column_names, const std::string& source,
+                    std::size_t line) {
+  std::string header;  // as the file wrote it
+  for (const auto& name : rec.names) header += (header.empty() ? "" : ", ") + name;
+  for (const auto& [ours, theirs] : column_names) {
+    const auto at = std::find(rec.names.begin(), rec.names.end(), theirs);
+    if (at == rec.names.end()) {
+      fail(source, line, "no column " + format_excerpt(theirs) + " to read as " + ours + " (the header has " +
+                             format_excerpt(header) + ")");
+    }
+    if (ours != theirs && rec.has(ours)) {
+      fail(source, line, "column " + format_excerpt(theirs) + " is to be read as " + ours + ", but the header has " + ours +
+                             " too: expected one of them");
+    }
+    *at = ours;
+  }
+}
+
 // True when `text` is a whole number in C syntax ("12", "-0.5", "1e3"): a header of numbers is a
 // data row without a header.
 bool is_number(const std::string& text) {
@@ -188,6 +209,7 @@ Recording parse_recording(const std::string& text, const std::string& source,
         if (rec.has(name)) fail(source, line_number, "column " + format_excerpt(name) + " appears twice");
         rec.names.push_back(name);
       }
+      rename_columns(rec, options.column_names, source, line_number);
       rec.columns.resize(rec.names.size());
       have_header = true;
       for (const auto& required : options.required) {

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +62,9 @@ struct RecordingReadOptions {
                                        columns::level_downstream_end};
   // Relative tolerance on the spacing of t_s (rounded printing makes it slightly uneven).
   double uniform_tolerance = 0.01;
+  // A file's own names for canalsim's columns, canalsim's name → the file's ("y_dwe_mm" →
+  // "level"): the header is read with canalsim's names before the required columns are checked.
+  std::map<std::string, std::string> column_names;
 };
 
 // What a gate-command series (an experiment's `input.file`) needs: time and u_mm only.

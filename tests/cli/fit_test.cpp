@@ -7,6 +7,8 @@
 #include <cmath>
 #include <fstream>
 
+#include <nlohmann/json.hpp>
+
 #include "testing/cli_run.hpp"
 
 namespace {
@@ -113,6 +115,47 @@ TEST(Fit, KIsReportedInTheRecordingsDeclaredUnits) {
   const auto at = json.find("\"K_declared_units\": ");
   ASSERT_NE(at, std::string::npos);
   EXPECT_NEAR(std::stod(json.substr(at + 20)), 0.26, 0.26 * 0.03) << json.substr(at, 60);
+  fs::remove_all(scratch);
+}
+
+// A field logger's own file: its own column names and SI units (a level in m, the gate in m),
+// read through --columns and --units, fits the closed-form step (K 2, T 20 s, L 1.5 s) as the
+// same data in canalsim's format does; a mapped column the header lacks, a name canalsim does not
+// know and a unit it does not know are one-line errors naming them.
+TEST(Fit, AUsersOwnColumnNamesAndSiUnitsAreReadThroughColumnsAndUnits) {
+  const fs::path scratch = scratch_dir("fit_own_columns");
+  {
+    std::ofstream out(scratch / "field.csv");
+    out << "time,gate,level\n";
+    for (int k = 0; k < 1200; ++k) {
+      const double t = 0.125 * k, since = t - 5.0 - 1.5;
+      const double y_mm = 45.0 + (since > 0 ? 10.0 * (1.0 - std::exp(-since / 20.0)) : 0.0);
+      out << t << "," << (t >= 5.0 ? 0.025 : 0.020) << "," << y_mm / 1000.0 << "\n";
+    }
+  }
+  const RunResult refused = run_canalsim("fit --model liom field.csv", scratch);
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_NE(refused.err.find("missing required column t_s"), std::string::npos) << refused.err;
+
+  const RunResult r =
+      run_canalsim("fit --model liom field.csv --columns t=time,u=gate,y_dwe=level --units u=m,y=m --json fit.json", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json fit = nlohmann::json::parse(read_text(scratch / "fit.json"));
+  const nlohmann::json& p = fit.at("fits").at(0).at("parameters");
+  EXPECT_NEAR(p["K"].get<double>(), 2.0, 0.02) << fit.dump();
+  EXPECT_NEAR(p["T"].get<double>(), 20.0, 0.4) << fit.dump();
+  EXPECT_NEAR(p["L"].get<double>(), 1.5, 0.15) << fit.dump();
+
+  const RunResult missing = run_canalsim("fit --model liom field.csv --columns t=time,u=gate,y_dwe=lvl", scratch);
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("field.csv:1: no column lvl to read as y_dwe_mm (the header has time, gate, level)"),
+            std::string::npos) << missing.err;
+  const RunResult unknown = run_canalsim("fit --model liom field.csv --columns z=time", scratch);
+  EXPECT_EQ(unknown.code, 1);
+  EXPECT_NE(unknown.err.find("--columns z=time: expected NAME=COLUMN"), std::string::npos) << unknown.err;
+  const RunResult feet = run_canalsim("fit --model liom field.csv --columns t=time,u=gate,y_dwe=level --units y=ft", scratch);
+  EXPECT_EQ(feet.code, 1);
+  EXPECT_NE(feet.err.find("--units y=ft: expected"), std::string::npos) << feet.err;
   fs::remove_all(scratch);
 }
 

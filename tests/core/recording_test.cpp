@@ -32,6 +32,23 @@ TEST(Recording, ParsesMetadataHeaderAndRowsInPaperUnits) {
   EXPECT_EQ(rec.column("regime")[1], static_cast<double>(RegimeCode::free));
 }
 
+// A file's own column names are read as canalsim's (RecordingReadOptions::column_names); a name
+// mapped onto a column canalsim's name also heads would make the reader guess, so it refuses.
+TEST(Recording, AFilesOwnColumnNamesAreReadAsCanalsimsWhenMapped) {
+  RecordingReadOptions options;
+  options.column_names = {{"t_s", "time"}, {"u_mm", "gate"}, {"y_dwe_mm", "level"}};
+  const auto rec = parse_recording("time,gate,level,note\n0,15,50,1\n0.13,20,51,2\n", "own.csv", options);
+  EXPECT_DOUBLE_EQ(rec.column("y_dwe_mm")[1], 51.0);
+  EXPECT_DOUBLE_EQ(rec.sample_period(), 0.13);
+  EXPECT_TRUE(rec.has("note"));
+  try {
+    parse_recording("time,gate,level,y_dwe_mm\n0,15,50,50\n0.13,20,51,51\n", "both.csv", options);
+    ADD_FAILURE() << "a column named twice was read";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "both.csv:1: column level is to be read as y_dwe_mm, but the header has y_dwe_mm too: expected one of them");
+  }
+}
+
 TEST(Recording, FormatThenParseGivesTheSameNumbers) {
   Recording rec;
   rec.set_column("t_s", {0.0, 0.13, 0.26});
