@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/json.hpp"
 #include "core/format.hpp"
 
 namespace canalsim::calibration {
@@ -110,21 +111,20 @@ std::string text_summary(const Calibration& c) {
 
 nlohmann::json to_json(const Calibration& c) {
   using nlohmann::json;
-  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json j;
   j["ok"] = c.ok;
   if (!c.ok) j["message"] = c.message;
   j["parameters"] = json::array();
   for (const auto& p : c.parameters) {
     j["parameters"].push_back({{"name", p.name}, {"unit", p.unit}, {"key", p.key}, {"start", p.start},
-                               {"value", p.value}, {"std", number(p.std)}, {"statistical_std", number(p.statistical_std)},
+                               {"value", p.value}, {"std", json_number(p.std)}, {"statistical_std", json_number(p.statistical_std)},
                                {"numerical_std", p.grid_shift}, {"converged_value", p.converged}, {"low", p.low}, {"high", p.high},
                                {"at_bound", p.at_bound}, {"sensitivity", p.sensitivity}});
   }
   json corr = json::array();
   for (const auto& row : c.correlation) {
     json r = json::array();
-    for (double v : row) r.push_back(number(v));
+    for (double v : row) r.push_back(json_number(v));
     corr.push_back(r);
   }
   j["correlation"] = corr;

@@ -2,6 +2,7 @@
 // trial in the laboratory canal, simulates op1–op4 with it, diagnoses blind and prints the
 // confusion matrix, top-1 accuracy, false alarms, parameter error and held-out fit gain.
 #include <cmath>
+#include <limits>
 #include <iostream>
 #include <memory>
 
@@ -77,9 +78,10 @@ void run(const BlindtestArguments& args) {
     for (const auto& t : result.trials) {
       // No estimate to compare where the verdict is another effect or the effect has no row.
       const bool estimated = std::isfinite(t.parameter_error);
-      const std::string estimate = estimated ? format_fixed(t.estimate, 3) : "-";
-      const std::string error = estimated ? format_fixed(100.0 * t.parameter_error, 1) + "%" : "-";
-      const std::string gain = std::isfinite(t.heldout_gain) ? (t.heldout_gain < 0.0 ? "" : "+") + format_fixed(t.heldout_gain, 2) : "-";
+      const double none = std::numeric_limits<double>::quiet_NaN();
+      const std::string estimate = format_figure(estimated ? t.estimate : none, 3);
+      const std::string error = format_figure(100.0 * t.parameter_error, 1, "%");
+      const std::string gain = (t.heldout_gain > 0.0 ? "+" : "") + format_figure(t.heldout_gain, 2);
       std::printf("%5d  %-21s %6.3f  %-21s %9s %7s %7s %s\n", t.index, t.truth.effect.c_str(), t.truth.value,
                   t.verdict.c_str(), estimate.c_str(), error.c_str(), gain.c_str(), t.message.c_str());
       if (t.second) {

@@ -19,6 +19,10 @@ std::string format_fixed(double value, int decimals) {
   return buffer;
 }
 
+std::string format_figure(double value, int decimals, const std::string& unit) {
+  return std::isfinite(value) ? format_fixed(value, decimals) + unit : "-";
+}
+
 std::string format_estimate(double value, double std) {
   if (!std::isfinite(value)) return format_fixed(value, 0) + " (± n/a)";  // an unlimited gate speed: ∞
   if (!(std > 0.0) || !std::isfinite(std)) return format_g(value, 4) + " (± n/a)";

@@ -12,6 +12,11 @@ std::string format_g(double value, int significant = 6);
 // Fixed decimals ("%.*f"); non-finite values print as ∞, -∞ or n/a (a NaN), never as inf or nan.
 std::string format_fixed(double value, int decimals);
 
+// A figure of a table or report: fixed decimals followed by `unit` ("12.3%"), and "-" alone where
+// the quantity is not defined (NaN, or an infinite index): a column of numbers reads "-" for
+// "none", not n/a, inf or nan.
+std::string format_figure(double value, int decimals, const std::string& unit = "");
+
 // An estimate with its standard deviation, "0.0123 ± 0.0041": the deviation to two significant
 // digits and the value to the same decimal place (so a small deviation never prints as ± 0.000).
 // A deviation that is zero or not finite was not estimated: "0.0123 (± n/a)"; an infinite value

@@ -7,6 +7,7 @@
 
 #include "calibration/observe.hpp"
 #include "calibration/parameters.hpp"
+#include "core/json.hpp"
 #include "core/declared_units.hpp"
 #include "core/errors.hpp"
 #include "core/format.hpp"
@@ -191,23 +192,22 @@ std::string baseline_summary(const BaselineDiagnosis& r) {
 nlohmann::json baseline_json(const BaselineDiagnosis& r) {
   using nlohmann::json;
   const calibration::Calibration& c = r.calibration;
-  const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json parameters = json::array();
   for (const auto& p : c.parameters) {
-    parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"value", number(p.value)}, {"std", number(p.std)},
-                          {"start", number(p.start)}, {"at_bound", p.at_bound}});
+    parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"value", json_number(p.value)}, {"std", json_number(p.std)},
+                          {"start", json_number(p.start)}, {"at_bound", p.at_bound}});
   }
   json fits = json::array();
   for (const auto& f : c.fits) {
-    fits.push_back({{"recording", f.recording}, {"channel", f.channel}, {"rms_before", number(f.rms_before)},
-                    {"rms_after", number(f.rms_after)}});
+    fits.push_back({{"recording", f.recording}, {"channel", f.channel}, {"rms_before", json_number(f.rms_before)},
+                    {"rms_after", json_number(f.rms_after)}});
   }
   json unidentified = json::array();
   for (const auto& u : c.identifiability) unidentified.push_back({{"parameters", u.parameters}, {"reason", u.reason}});
   return json{{"files", r.baseline},           {"parameters", parameters},
-              {"residual_before", number(c.cost_before)}, {"residual_after", number(c.cost_after)},
+              {"residual_before", json_number(c.cost_before)}, {"residual_after", json_number(c.cost_after)},
               {"fits", fits},                  {"not_identifiable", unidentified},
-              {"simulations", c.simulations},  {"seconds", number(c.seconds)}};
+              {"simulations", c.simulations},  {"seconds", json_number(c.seconds)}};
 }
 
 std::vector<std::string> baseline_coverage(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings) {
