@@ -563,6 +563,190 @@ solver::SteadyStateOptions initial_steady_state_options(const Scenario& s, const
   return steady;
 }
 
+namespace {
+
+// Where the sensors read the canal: y_dw below the gate in the first pool, y_dwe at the end of the
+// last, y_check at the check of every pool of a canal of several (BuiltCanal::check_depth).
+struct SensorSites {
+  int last_pool = 0;
+  double below_gate_x = 0.0, end_x = 0.0;
+  int checks = 0;
+};
+
+SensorSites sensor_sites(const BuiltCanal& b, const SensorSpec& sensors) {
+  SensorSites at;
+  at.last_pool = b.canal.reach_count() - 1;
+  const auto& last = b.canal.reach(at.last_pool);
+  at.end_x = sensors.downstream_sensor_x_m < 0.0 ? last.length() - 0.5 * last.cell_length() : sensors.downstream_sensor_x_m;
+  at.below_gate_x = std::min(sensors.below_gate_sensor_x_m, b.canal.reach(0).length());
+  at.checks = b.canal.reach_count() > 1 ? b.canal.reach_count() : 0;
+  return at;
+}
+
+// The true state the sensors read, at the canal's current time.
+TrueState true_state(const BuiltCanal& b, const SensorSites& at) {
+  const double t = b.canal.time();
+  std::vector<double> checks(static_cast<std::size_t>(at.checks));
+  for (int i = 0; i < at.checks; ++i) checks[static_cast<std::size_t>(i)] = b.check_depth(i);
+  return TrueState{t,
+                   b.supply ? b.supply->level(t) : 0.0,
+                   b.controlled->opening(t),
+                   b.canal.sample(0, at.below_gate_x, solver::Quantity::depth),
+                   b.canal.sample(at.last_pool, at.end_x, solver::Quantity::depth),
+                   b.controlled_discharge(),
+                   std::move(checks)};
+}
+
+// The run's instruments: the level sensors (each with its own offset and noise seed), the gate's
+// position sensor, and a level sensor at every pool's check.
+struct Instruments {
+  Sensor y_dwe, y_dw, y_up, x_up;
+  std::vector<Sensor> y_check;
+
+  void observe(double t, const TrueState& now) {
+    y_dwe.observe(t, now.end_depth);
+    y_dw.observe(t, now.below_gate_depth);
+    y_up.observe(t, now.upstream_level);
+    x_up.observe(t, now.opening);
+    for (std::size_t i = 0; i < y_check.size(); ++i) y_check[i].observe(t, now.check_depths[i]);
+  }
+  // Level sensors whose readings lead the command (a negative delay) still owe the last samples.
+  void finish(std::size_t samples) {
+    for (Sensor* sensor : {&y_dwe, &y_dw, &y_up}) sensor->finish(samples);
+    for (Sensor& sensor : y_check) sensor.finish(samples);
+  }
+};
+
+Instruments make_instruments(const SensorSpec& sensors, int checks) {
+  auto level_sensor = [&](std::uint64_t seed_offset, double own_offset_mm = 0.0) {
+    SensorOptions o = SensorOptions::defaults_for(SensorKind::level);
+    o.sample_period = sensors.period_s;
+    o.resolution = sensors.resolution_mm * kMm;
+    o.noise_std = sensors.noise_std_mm * kMm;
+    o.delay = sensors.delay_s;
+    o.offset = (sensors.offset_mm + own_offset_mm) * kMm;
+    o.seed = sensors.seed + seed_offset;
+    return Sensor(o);
+  };
+  SensorOptions gate_position = SensorOptions::defaults_for(SensorKind::gate_position);
+  gate_position.sample_period = sensors.period_s;
+  Instruments out{level_sensor(0, sensors.offset_y_dwe_mm), level_sensor(1, sensors.offset_y_dw_mm),
+                  level_sensor(2, sensors.offset_y_up_mm), Sensor(gate_position), {}};
+  for (int i = 0; i < checks; ++i) out.y_check.push_back(level_sensor(3 + static_cast<std::uint64_t>(i)));
+  return out;
+}
+
+// The canal stepped through an experiment. The solver steps freely (no step is cut short to hit
+// a sample time); the state at a sample is the linear interpolation in time between the true
+// states before and after it. Between steps of ~h/3 the interpolation error is far below the
+// 0.05 mm sensor resolution.
+class Run {
+ public:
+  Run(BuiltCanal& b, const ExperimentSpec& e, const SensorSites& at, RunCostGuard& guard)
+      : b_(b), e_(e), at_(at), guard_(guard), before_(true_state(b, at)), after_(before_),
+        // A step ends just after every jump of the command, so the gate switches when its
+        // command does (eq. 16 from that instant), not at the first step boundary after it: up to
+        // a step (tens of ms) late, which shifts every response to a switch and makes it jump,
+        // not vary smoothly, with the scenario's parameters (calibration and diagnosis
+        // differentiate it).
+        breaks_(b.command->jumps(b.canal.time(), e.duration_s)) {}
+
+  // The true state at sample time t, stepping the canal past it.
+  TrueState state_at(double t) {
+    while (after_.time < t) step();
+    return interpolate(before_, after_, t);
+  }
+  double time() const { return after_.time; }
+
+ private:
+  void step() {
+    // Events take effect at their time exactly: no step crosses one.
+    while (next_event_ < e_.events.size() && e_.events[next_event_].t_s <= b_.canal.time() + 1e-9) {
+      apply_event(b_, e_.events[next_event_++]);
+    }
+    const double to_event = next_event_ < e_.events.size() ? e_.events[next_event_].t_s - b_.canal.time()
+                                                           : std::numeric_limits<double>::infinity();
+    while (next_break_ < breaks_.size() && breaks_[next_break_] <= b_.canal.time()) ++next_break_;
+    const double to_break = next_break_ < breaks_.size() ? breaks_[next_break_] - b_.canal.time() + kJustAfter
+                                                         : std::numeric_limits<double>::infinity();
+    before_ = after_;
+    check(b_.canal.step(std::min(to_event, to_break)), "experiment " + e_.name);
+    guard_.check(b_.canal.statistics().steps, b_.canal.time(), b_.canal.time() - before_.time);
+    after_ = true_state(b_, at_);
+  }
+
+  static constexpr double kJustAfter = 1e-9;  // s: the zero-order-hold command takes its new value from t_i on
+  BuiltCanal& b_;
+  const ExperimentSpec& e_;
+  const SensorSites& at_;
+  RunCostGuard& guard_;
+  TrueState before_, after_;
+  std::vector<double> breaks_;
+  std::size_t next_event_ = 0, next_break_ = 0;
+};
+
+// What the run recorded besides the sensors: the sampling instants, the command and the
+// controlled gate's discharge.
+struct Logged {
+  std::vector<double> t_s, u_mm, q_lps;
+};
+
+std::vector<double> in_mm(const std::vector<double>& v) {
+  std::vector<double> out(v.size());
+  std::transform(v.begin(), v.end(), out.begin(), [](double x) { return x / kMm; });
+  return out;
+}
+
+// The regime by the paper's conditions (8)/(10) and y_lc of eq. (23), from the recorded
+// (measured) levels and opening, as the paper computed its Figure 6.
+void add_regime_columns(Recording& rec) {
+  const auto& dwe = rec.column(columns::level_downstream_end);
+  const auto& xup = rec.column(columns::gate_position);
+  const auto& yup = rec.column(columns::upstream_level);
+  std::vector<double> y_lc(dwe.size()), regime(dwe.size());
+  for (std::size_t k = 0; k < dwe.size(); ++k) {
+    // A closed gate has no finite limit; 1e6 mm keeps the file readable (no "inf").
+    y_lc[k] = std::min(gates::limit_condition_level(dwe[k] * kMm, xup[k] * kMm) / kMm, 1e6);
+    const auto r = gates::classify_regime(yup[k] * kMm, dwe[k] * kMm, xup[k] * kMm);
+    regime[k] = r == gates::GateRegime::submerged || r == gates::GateRegime::closed ? static_cast<double>(RegimeCode::submerged)
+                                                                                    : static_cast<double>(RegimeCode::free);
+  }
+  rec.set_column(columns::regime, std::move(regime));
+  rec.set_column("y_lc_mm", std::move(y_lc));
+}
+
+// The recording of a run: metadata, the run's volume balance, the logged series, every
+// instrument's readings in mm, and the regime columns.
+Recording recording_of(const Scenario& s, const ExperimentSpec& e, const BuiltCanal& b, double h,
+                       const InitialState& initial, const WallWatch& walls, const Logged& logged,
+                       const Instruments& instruments) {
+  Recording rec;
+  rec.source = s.name + "/" + e.name;
+  rec.set_meta("scenario", s.name);
+  rec.set_meta("experiment", e.name);
+  // The opening the canal rested at before t = 0: an input file holds its first command there.
+  const double rest_mm = e.input.kind == InputKind::file && b.command ? b.command->value(-1e-9) / kMm : e.operating_opening_mm;
+  rec.set_meta("operating_opening_mm", format_g(rest_mm));
+  rec.set_meta("sampling_period_s", format_g(h));
+  rec.set_meta("generator", "canalsim simulate");
+  rec.set_meta("initial_state", initial.description);
+  record_run_report(rec, b.canal.total_balance(), b.canal.time(), walls);
+  rec.set_column(columns::time, logged.t_s);
+  rec.set_column(columns::gate_command, logged.u_mm);
+  rec.set_column(columns::gate_position, in_mm(instruments.x_up.values()));
+  rec.set_column(columns::upstream_level, in_mm(instruments.y_up.values()));
+  rec.set_column(columns::level_below_gate, in_mm(instruments.y_dw.values()));
+  rec.set_column(columns::level_downstream_end, in_mm(instruments.y_dwe.values()));
+  rec.set_column(columns::discharge, logged.q_lps);
+  add_regime_columns(rec);
+  for (std::size_t i = 0; i < instruments.y_check.size(); ++i) {
+    rec.set_column("y_check" + std::to_string(i + 1) + "_mm", in_mm(instruments.y_check[i].values()));
+  }
+  return rec;
+}
+
+}  // namespace
+
 Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOptions& options) {
   const SensorSpec sensors = e.sensors.value_or(s.sensors);
   check_run_cost(s, e, sensors.period_s, options.allow_long_run);
@@ -583,143 +767,27 @@ Recording simulate(const Scenario& s, const ExperimentSpec& e, const SimulateOpt
   // Sampling: every channel read at t_k = k h from the true state, then through its sensor.
   const double h = sensors.period_s;
   const auto samples = static_cast<std::size_t>(std::floor(e.duration_s / h + 1e-9)) + 1;
-  const int last = b.canal.reach_count() - 1;
-  const auto& last_reach = b.canal.reach(last);
-  const double x_end = sensors.downstream_sensor_x_m < 0.0
-                           ? last_reach.length() - 0.5 * last_reach.cell_length()
-                           : sensors.downstream_sensor_x_m;
-  const double x_below = std::min(sensors.below_gate_sensor_x_m, b.canal.reach(0).length());
-
-  auto level_sensor = [&](std::uint64_t seed_offset, double own_offset_mm = 0.0) {
-    SensorOptions o = SensorOptions::defaults_for(SensorKind::level);
-    o.sample_period = h;
-    o.resolution = sensors.resolution_mm * kMm;
-    o.noise_std = sensors.noise_std_mm * kMm;
-    o.delay = sensors.delay_s;
-    o.offset = (sensors.offset_mm + own_offset_mm) * kMm;
-    o.seed = sensors.seed + seed_offset;
-    return Sensor(o);
-  };
-  Sensor y_dwe = level_sensor(0, sensors.offset_y_dwe_mm), y_dw = level_sensor(1, sensors.offset_y_dw_mm),
-         y_up = level_sensor(2, sensors.offset_y_up_mm);
-  SensorOptions gate_options = SensorOptions::defaults_for(SensorKind::gate_position);
-  gate_options.sample_period = h;
-  Sensor x_up(gate_options);
-  std::vector<double> t_s, u_mm, q_lps, regime;
-  // y_check1..N: the depth at the check of each pool (BuiltCanal::check_depth), for canals of
-  // several pools.
-  const int checks = b.canal.reach_count() > 1 ? b.canal.reach_count() : 0;
-  std::vector<Sensor> y_check;
-  for (int i = 0; i < checks; ++i) y_check.push_back(level_sensor(3 + static_cast<std::uint64_t>(i)));
-  const auto check_depths = [&] {
-    std::vector<double> depths(static_cast<std::size_t>(checks));
-    for (int i = 0; i < checks; ++i) depths[static_cast<std::size_t>(i)] = b.check_depth(i);
-    return depths;
-  };
-
-  // The solver steps freely (no step is cut short to hit a sample time); each sample is the linear
-  // interpolation in time between the true states before and after it. Between steps of ~h/3 the
-  // interpolation error is far below the 0.05 mm sensor resolution.
-  const auto snapshot = [&] {
-    const double t = b.canal.time();
-    return TrueState{t,
-                     b.supply ? b.supply->level(t) : 0.0,
-                     b.controlled->opening(t),
-                     b.canal.sample(0, x_below, solver::Quantity::depth),
-                     b.canal.sample(last, x_end, solver::Quantity::depth),
-                     b.controlled_discharge(),
-                     check_depths()};
-  };
-  TrueState before = snapshot(), after = before;
+  const SensorSites at = sensor_sites(b, sensors);
+  Instruments instruments = make_instruments(sensors, at.checks);
+  Logged logged;
   WallWatch walls(s);
-  std::size_t next_event = 0;
-  // A step ends just after every jump of the command, so the gate switches when its command does
-  // (eq. 16 from that instant), not at the first step boundary after it: up to a step (tens of
-  // ms) late, which shifts every response to a switch and makes it jump, not vary smoothly, with
-  // the scenario's parameters (calibration and diagnosis differentiate it).
-  const std::vector<double> breaks = b.command->jumps(b.canal.time(), e.duration_s);
-  std::size_t next_break = 0;
-  constexpr double just_after = 1e-9;  // s: the zero-order-hold command takes its new value from t_i on
+  Run run(b, e, at, guard);
   for (std::size_t k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * h;
-    while (after.time < t) {
-      // Events take effect at their time exactly: no step crosses one.
-      while (next_event < e.events.size() && e.events[next_event].t_s <= b.canal.time() + 1e-9) {
-        apply_event(b, e.events[next_event++]);
-      }
-      const double to_event = next_event < e.events.size() ? e.events[next_event].t_s - b.canal.time()
-                                                           : std::numeric_limits<double>::infinity();
-      while (next_break < breaks.size() && breaks[next_break] <= b.canal.time()) ++next_break;
-      const double to_break = next_break < breaks.size() ? breaks[next_break] - b.canal.time() + just_after
-                                                         : std::numeric_limits<double>::infinity();
-      before = after;
-      check(b.canal.step(std::min(to_event, to_break)), "experiment " + e.name);
-      guard.check(b.canal.statistics().steps, b.canal.time(), b.canal.time() - before.time);
-      after = snapshot();
-    }
-    const TrueState now = interpolate(before, after, t);
-    walls.observe(b.canal, after.time);
-    y_dwe.observe(t, now.end_depth);
-    y_dw.observe(t, now.below_gate_depth);
-    y_up.observe(t, now.upstream_level);
-    x_up.observe(t, now.opening);
-    for (int i = 0; i < checks; ++i) y_check[static_cast<std::size_t>(i)].observe(t, now.check_depths[static_cast<std::size_t>(i)]);
-    t_s.push_back(t);
-    u_mm.push_back(b.controlled->command(t) / kMm);
-    q_lps.push_back(now.discharge / kMm);
+    const TrueState now = run.state_at(t);
+    walls.observe(b.canal, run.time());
+    instruments.observe(t, now);
+    logged.t_s.push_back(t);
+    logged.u_mm.push_back(b.controlled->command(t) / kMm);
+    logged.q_lps.push_back(now.discharge / kMm);
     if (k % std::max<std::size_t>(1, samples / 100) == 0) {
       report(initial.progress_weight + (1.0 - initial.progress_weight) * t / e.duration_s);
     }
   }
-  // Level sensors whose readings lead the command (a negative delay) still owe the last samples.
-  for (Sensor* sensor : {&y_dwe, &y_dw, &y_up}) sensor->finish(samples);
-  for (Sensor& sensor : y_check) sensor.finish(samples);
+  instruments.finish(samples);
   report(1.0);
   if (options.on_finish) options.on_finish(b);
-
-  auto in_mm = [](const std::vector<double>& v) {
-    std::vector<double> out(v.size());
-    std::transform(v.begin(), v.end(), out.begin(), [](double x) { return x / kMm; });
-    return out;
-  };
-  Recording rec;
-  rec.source = s.name + "/" + e.name;
-  rec.set_meta("scenario", s.name);
-  rec.set_meta("experiment", e.name);
-  // The opening the canal rested at before t = 0: an input file holds its first command there.
-  const double rest_mm = e.input.kind == InputKind::file && b.command ? b.command->value(-1e-9) / kMm : e.operating_opening_mm;
-  rec.set_meta("operating_opening_mm", format_g(rest_mm));
-  rec.set_meta("sampling_period_s", format_g(h));
-  rec.set_meta("generator", "canalsim simulate");
-  rec.set_meta("initial_state", initial.description);
-  record_run_report(rec, b.canal.total_balance(), b.canal.time(), walls);
-  rec.set_column(columns::time, t_s);
-  rec.set_column(columns::gate_command, u_mm);
-  rec.set_column(columns::gate_position, in_mm(x_up.values()));
-  rec.set_column(columns::upstream_level, in_mm(y_up.values()));
-  rec.set_column(columns::level_below_gate, in_mm(y_dw.values()));
-  rec.set_column(columns::level_downstream_end, in_mm(y_dwe.values()));
-  rec.set_column(columns::discharge, q_lps);
-  // The regime by the paper's conditions (8)/(10) and y_lc of eq. (23), from the recorded
-  // (measured) levels and opening, as the paper computed its Figure 6.
-  const auto& dwe = rec.column(columns::level_downstream_end);
-  const auto& xup = rec.column(columns::gate_position);
-  const auto& yup = rec.column(columns::upstream_level);
-  std::vector<double> y_lc(dwe.size());
-  for (std::size_t k = 0; k < dwe.size(); ++k) {
-    // A closed gate has no finite limit; 1e6 mm keeps the file readable (no "inf").
-    y_lc[k] = std::min(gates::limit_condition_level(dwe[k] * kMm, xup[k] * kMm) / kMm, 1e6);
-    const auto r = gates::classify_regime(yup[k] * kMm, dwe[k] * kMm, xup[k] * kMm);
-    regime.push_back(r == gates::GateRegime::submerged || r == gates::GateRegime::closed
-                         ? static_cast<double>(RegimeCode::submerged)
-                         : static_cast<double>(RegimeCode::free));
-  }
-  rec.set_column(columns::regime, regime);
-  rec.set_column("y_lc_mm", std::move(y_lc));
-  for (int i = 0; i < checks; ++i) {
-    rec.set_column("y_check" + std::to_string(i + 1) + "_mm", in_mm(y_check[static_cast<std::size_t>(i)].values()));
-  }
-  return rec;
+  return recording_of(s, e, b, h, initial, walls, logged, instruments);
 }
 
 }  // namespace canalsim::scenarios

@@ -145,45 +145,41 @@ void add_validation_claims(const ValidationTable& v, const std::string& model, s
                                     v.experiments, p, h));
 }
 
-std::vector<Claim> conclusions(const StudyResult& r) {
-  std::vector<Claim> claims;
-  const auto& liom = find_table(r, ModelKind::liom);
-  const auto& lfom = find_table(r, ModelKind::lfom);
-  const auto& nliom_s = find_table(r, ModelKind::nliom_s);
-  const auto& nlfom_s = find_table(r, ModelKind::nlfom_s);
-  const auto& nliom_f = find_table(r, ModelKind::nliom_f);
-  const auto& nlfom_f = find_table(r, ModelKind::nlfom_f);
+namespace {
 
-  // Per-op columns of a table: paper and here.
-  const auto column = [](const ModelTable& t, const std::string& name, bool paper) {
-    std::vector<double> out;
-    for (std::size_t j = 0; j < t.spec.experiments.size(); ++j) {
-      out.push_back(paper ? paper_value(paper_fit(t, t.spec.experiments[j], name))
-                          : (name == "nrmse" ? t.fits[j].nrmse.front()
-                                             : here_parameter(t.fits[j].model, name)));
-    }
-    return out;
-  };
-  // Nrmse gain of table a over table b at b's ops shared with a.
-  const auto gain = [&](const ModelTable& a, const ModelTable& b, bool paper) {
-    std::vector<double> out;
-    for (const auto& op : a.spec.experiments) {
-      out.push_back(paper ? paper_value(paper_fit(a, op, "nrmse")) - paper_value(paper_fit(b, op, "nrmse"))
-                          : here_nrmse(a, op) - here_nrmse(b, op));
-    }
-    return out;
-  };
-  const auto nominal_loss = [&](const ModelTable& t, bool paper) {
-    std::vector<double> out;
-    for (std::size_t j = 0; j < t.spec.experiments.size(); ++j) {
-      const auto& op = t.spec.experiments[j];
-      out.push_back(paper ? paper_value(paper_fit(t, op, "nrmse")) -
-                                paper_value("/" + t.spec.paper_key + "/nominal/nrmse/" + op)
-                          : t.fits[j].nrmse.front() - t.nominal.nrmse[j]);
-    }
-    return out;
-  };
-  // Table 1.
+// A table's per-op column of a parameter (or "nrmse"): the paper's, or here.
+std::vector<double> column(const ModelTable& t, const std::string& name, bool paper) {
+  std::vector<double> out;
+  for (std::size_t j = 0; j < t.spec.experiments.size(); ++j) {
+    out.push_back(paper ? paper_value(paper_fit(t, t.spec.experiments[j], name))
+                        : (name == "nrmse" ? t.fits[j].nrmse.front() : here_parameter(t.fits[j].model, name)));
+  }
+  return out;
+}
+
+// Nrmse gain of table a over table b at a's ops.
+std::vector<double> gain(const ModelTable& a, const ModelTable& b, bool paper) {
+  std::vector<double> out;
+  for (const auto& op : a.spec.experiments) {
+    out.push_back(paper ? paper_value(paper_fit(a, op, "nrmse")) - paper_value(paper_fit(b, op, "nrmse"))
+                        : here_nrmse(a, op) - here_nrmse(b, op));
+  }
+  return out;
+}
+
+// What the nominal model loses against the individual fits, per op (Nrmse points).
+std::vector<double> nominal_loss(const ModelTable& t, bool paper) {
+  std::vector<double> out;
+  for (std::size_t j = 0; j < t.spec.experiments.size(); ++j) {
+    const auto& op = t.spec.experiments[j];
+    out.push_back(paper ? paper_value(paper_fit(t, op, "nrmse")) - paper_value("/" + t.spec.paper_key + "/nominal/nrmse/" + op)
+                        : t.fits[j].nrmse.front() - t.nominal.nrmse[j]);
+  }
+  return out;
+}
+
+// Table 1: the LIOM's parameters and fit, and how much they vary.
+void add_liom_claims(const ModelTable& liom, std::vector<Claim>& claims) {
   claims.push_back(close_claim("table1", "The LIOM gain K agrees with the paper's within 30 %",
                                liom.spec.experiments, column(liom, "K", true), column(liom, "K", false),
                                0.30, true, "mm/mm"));
@@ -199,8 +195,10 @@ std::vector<Claim> conclusions(const StudyResult& r) {
       "table1", "The LIOM time constant varies more than its gain across op1–op4 (ΔT − ΔK, eq. 22)",
       {"op1–op4"}, {paper_value("/table1_LIOM/uncertainty_pct/T") - paper_value("/table1_LIOM/uncertainty_pct/K")},
       {100.0 * (liom.uncertainty.at("T") - liom.uncertainty.at("K"))}, "points of Δp"));
+}
 
-  // Table 2.
+// Table 2: LFOM against LIOM.
+void add_lfom_claims(const ModelTable& lfom, const ModelTable& liom, std::vector<Claim>& claims) {
   claims.push_back(difference_claim("table2", "LFOM beats LIOM (Nrmse)", lfom.spec.experiments,
                                     gain(lfom, liom, true), gain(lfom, liom, false)));
   claims.push_back(range_claim("table2", "The LFOM order is clearly fractional", "λ ≤ 0.9",
@@ -216,8 +214,11 @@ std::vector<Claim> conclusions(const StudyResult& r) {
     claims.push_back(difference_claim("table2", "The nominal LFOM beats the nominal LIOM (Nrmse)",
                                       lfom.spec.experiments, p, h));
   }
+}
 
-  // Tables 3 and 4.
+// Tables 3 and 4: the submerged-flow nonlinear models.
+void add_submerged_flow_claims(const ModelTable& nliom_s, const ModelTable& nlfom_s, const ModelTable& liom,
+                               const ModelTable& lfom, std::vector<Claim>& claims) {
   claims.push_back(difference_claim("table3", "NLIOM-S beats LIOM (Nrmse)", nliom_s.spec.experiments,
                                     gain(nliom_s, liom, true), gain(nliom_s, liom, false)));
   claims.push_back(range_claim("table3", "The NLIOM-S exponent is near the orifice law's 1/2",
@@ -242,11 +243,11 @@ std::vector<Claim> conclusions(const StudyResult& r) {
     claims.push_back(range_claim("table4", "The NLFOM-S parameters vary little between op1 and op2",
                                  "Δp ≤ 15 %", where, p, h, 0.0, 15.0));
   }
+}
 
-  // Table 5.
-  add_validation_claims(r.table5, "NLFOM-S", claims);
-
-  // Tables 6 and 7.
+// Tables 6 and 7: the free-flow nonlinear models.
+void add_free_flow_claims(const ModelTable& nliom_f, const ModelTable& nlfom_f, const ModelTable& nlfom_s,
+                          const ModelTable& liom, std::vector<Claim>& claims) {
   claims.push_back(difference_claim("table6", "NLIOM-F beats LIOM (Nrmse)", nliom_f.spec.experiments,
                                     gain(nliom_f, liom, true), gain(nliom_f, liom, false)));
   claims.push_back(range_claim("table6", "The free-flow exponent is large", "γ ≥ 3",
@@ -265,11 +266,11 @@ std::vector<Claim> conclusions(const StudyResult& r) {
                                {here_parameter(liom.fits[index_of(liom.spec.experiments, "op3")].model, "K"),
                                 here_parameter(liom.fits[index_of(liom.spec.experiments, "op4")].model, "K")},
                                0.30, true, "mm/mm"));
+}
 
-  // Table 8.
-  add_validation_claims(r.table8, "NLFOM-F", claims);
-
-  // Figure 6: flow regimes.
+// Figure 6 (flow regimes) and Figure 4 (the PRBS bandwidth).
+void add_figure_claims(const StudyResult& r, const ModelTable& nliom_s, const ModelTable& nliom_f,
+                       std::vector<Claim>& claims) {
   {
     std::vector<std::string> sub_where, free_where;
     std::vector<double> sub_p, sub_h, free_p, free_h;
@@ -297,6 +298,25 @@ std::vector<Claim> conclusions(const StudyResult& r) {
   claims.push_back(close_claim("figure4", "The PRBS −3 dB bandwidth agrees with the paper's 5.58 rad/s within 5 %",
                                {r.spectrum.experiment}, {5.58}, {r.spectrum.bandwidth_measured_rad_s}, 0.05,
                                true, "rad/s"));
+}
+
+}  // namespace
+
+std::vector<Claim> conclusions(const StudyResult& r) {
+  std::vector<Claim> claims;
+  const auto& liom = find_table(r, ModelKind::liom);
+  const auto& lfom = find_table(r, ModelKind::lfom);
+  const auto& nliom_s = find_table(r, ModelKind::nliom_s);
+  const auto& nlfom_s = find_table(r, ModelKind::nlfom_s);
+  const auto& nliom_f = find_table(r, ModelKind::nliom_f);
+  const auto& nlfom_f = find_table(r, ModelKind::nlfom_f);
+  add_liom_claims(liom, claims);
+  add_lfom_claims(lfom, liom, claims);
+  add_submerged_flow_claims(nliom_s, nlfom_s, liom, lfom, claims);
+  add_validation_claims(r.table5, "NLFOM-S", claims);
+  add_free_flow_claims(nliom_f, nlfom_f, nlfom_s, liom, claims);
+  add_validation_claims(r.table8, "NLFOM-F", claims);
+  add_figure_claims(r, nliom_s, nliom_f, claims);
   return claims;
 }
 
