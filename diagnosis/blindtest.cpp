@@ -10,6 +10,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "core/json.hpp"
 #include "core/format.hpp"
 #include "core/parallel.hpp"
 #include "diagnosis/blindtest_trial.hpp"
@@ -133,9 +134,10 @@ bool names_effect(const std::string& verdict, const std::string& concealed, bool
   return !gate_position_recorded && twin && verdict == twin;
 }
 
-BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
-  if (const Status status = o.validate(); !status) throw InputError("blindtest options: " + status.message());
-  const auto started = std::chrono::steady_clock::now();
+namespace {
+
+// The experiments every trial records, shortened to the test's duration.
+std::vector<scenarios::ExperimentSpec> trial_experiments(const scenarios::Scenario& base, const BlindtestOptions& o) {
   std::vector<scenarios::ExperimentSpec> experiments;
   for (const auto& name : o.experiments) {
     const auto* e = base.find_experiment(name);
@@ -144,7 +146,11 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     if (o.duration_s > 0.0) copy.duration_s = o.duration_s;
     experiments.push_back(copy);
   }
-  // Inflow at each operating point (the reference of lateral_outflow): from the nominal steady state.
+  return experiments;
+}
+
+// Inflow at each operating point (the reference of lateral_outflow): from the nominal steady state.
+std::vector<double> operating_inflows(const scenarios::Scenario& base, const std::vector<scenarios::ExperimentSpec>& experiments) {
   std::vector<double> inflow(experiments.size(), 0.0);
   for (std::size_t i = 0; i < experiments.size(); ++i) {
     scenarios::ExperimentSpec steady = experiments[i];
@@ -153,10 +159,13 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     const Recording r = scenarios::simulate(base, steady);
     inflow[i] = r.column(columns::discharge).front() * 1e-3;
   }
-  // Balanced classes: shuffled blocks of every effect (and none).
-  std::vector<std::string> classes;
-  if (o.include_none) classes.push_back("none");
-  for (const auto& e : effect_names(o)) classes.push_back(e);
+  return inflow;
+}
+
+// The trials' concealed effects: balanced classes, shuffled blocks of every class; then, for the
+// realistic test, two different effects of the catalog at once, drawn after the single ones so
+// that those stay the same whatever their number.
+std::vector<Trial> draw_trials(const BlindtestOptions& o, const std::vector<std::string>& classes) {
   std::mt19937_64 rng(o.seed);
   // Instrument faults go on one level channel of those the trial's recordings carry (a reduced
   // model reads y_dwe_mm alone).
@@ -175,8 +184,6 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
       }
     }
   }
-  // Two effects at once (realistic test): two different effects of the catalog, drawn after the
-  // single ones so that those stay the same whatever their number.
   const std::vector<std::string> effects = effect_names(o);
   for (int k = 0; o.realistic && k < o.realistic->two_effect_trials && effects.size() >= 2; ++k) {
     const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
@@ -189,18 +196,17 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     trials.push_back(std::move(t));
   }
   for (std::size_t i = 0; i < trials.size(); ++i) trials[i].index = static_cast<int>(i);
+  return trials;
+}
 
-  BlindtestResult result;
-  result.trials = std::move(trials);
+// Runs every trial, o.threads at a time. Each trial catches its own failure (verdict "failed"),
+// so one bad trial does not end the test.
+void run_trials(const blind::TrialContext& context, std::vector<Trial>& trials, const BlindtestOptions& o) {
   std::atomic<int> done{0};
   std::mutex progress_mutex;
-  blind::TrialContext context{base, experiments, inflow, o, o.diagnose};
-  context.diagnose.threads = 1;
-  context.diagnose.progress = nullptr;
-  const int total = static_cast<int>(result.trials.size());
-  // Each trial catches its own failure (verdict "failed"), so one bad trial does not end the test.
-  parallel_for(result.trials.size(), o.threads, [&](std::size_t i) {
-    Trial& trial = result.trials[i];
+  const int total = static_cast<int>(trials.size());
+  parallel_for(trials.size(), o.threads, [&](std::size_t i) {
+    Trial& trial = trials[i];
     const auto t0 = std::chrono::steady_clock::now();
     try {
       blind::run_trial(context, trial);
@@ -215,8 +221,11 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
       o.progress({static_cast<double>(finished) / total, std::to_string(finished) + "/" + std::to_string(total) + " trials"});
     }
   });
+}
 
-  // Summary.
+// The confusion matrix (rows: the drawn classes; columns: those and `unexplained`) and the
+// scores of the result's trials.
+void tally(const std::vector<std::string>& classes, BlindtestResult& result) {
   for (const auto& c : classes) {
     if (std::find(result.classes.begin(), result.classes.end(), class_of(c)) == result.classes.end()) {
       result.classes.push_back(class_of(c));
@@ -280,8 +289,28 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
     result.median_heldout_gain = sorted[sorted.size() / 2];
     result.min_heldout_gain = *std::min_element(gains.begin(), gains.end());
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   result.mean_trial_seconds = total_seconds / static_cast<double>(std::max<std::size_t>(result.trials.size(), 1));
+}
+
+}  // namespace
+
+BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOptions& o) {
+  if (const Status status = o.validate(); !status) throw InputError("blindtest options: " + status.message());
+  const auto started = std::chrono::steady_clock::now();
+  const std::vector<scenarios::ExperimentSpec> experiments = trial_experiments(base, o);
+  const std::vector<double> inflow = operating_inflows(base, experiments);
+  std::vector<std::string> classes;
+  if (o.include_none) classes.push_back("none");
+  for (const auto& e : effect_names(o)) classes.push_back(e);
+
+  BlindtestResult result;
+  result.trials = draw_trials(o, classes);
+  blind::TrialContext context{base, experiments, inflow, o, o.diagnose};
+  context.diagnose.threads = 1;
+  context.diagnose.progress = nullptr;
+  run_trials(context, result.trials, o);
+  tally(classes, result);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return result;
 }
 
@@ -326,7 +355,9 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
   }
   s << "\n(" << legend << (legend.empty() ? "" : ", ") << "unexpl = unexplained)\n\n";
   // No estimate at all: its median and maximum are not defined, not 0%.
-  const auto percent = [&](double v) { return r.estimated > 0 ? format_fixed(100.0 * v, 1) + "%" : std::string("-"); };
+  const auto percent = [&](double v) {
+    return format_figure(r.estimated > 0 ? 100.0 * v : std::numeric_limits<double>::quiet_NaN(), 1, "%");
+  };
   // A rate over no clean trials is undefined, not 0%.
   char rate[64];
   std::snprintf(rate, sizeof rate, "%d/%d = %.1f%%", r.false_alarms, r.clean_trials, 100.0 * r.false_alarm_rate);
@@ -370,7 +401,6 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
 
 nlohmann::json to_json(const BlindtestResult& r) {
   using nlohmann::json;
-  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json trials = json::array();
   for (const auto& t : r.trials) {
     json named = json::array(), named_values = json::array();
@@ -379,8 +409,8 @@ nlohmann::json to_json(const BlindtestResult& r) {
       named_values.push_back(n.value);
     }
     trials.push_back({{"trial", t.index}, {"concealed", t.truth.effect}, {"value", t.truth.value},
-                      {"verdict", t.verdict}, {"reason", t.reason}, {"correct", t.correct}, {"channel_right", t.channel_right}, {"estimate", num(t.estimate)},
-                      {"parameter_error", num(t.parameter_error)}, {"heldout_gain", num(t.heldout_gain)},
+                      {"verdict", t.verdict}, {"reason", t.reason}, {"form", t.form}, {"correct", t.correct}, {"channel_right", t.channel_right}, {"estimate", json_number(t.estimate)},
+                      {"parameter_error", json_number(t.parameter_error)}, {"heldout_gain", json_number(t.heldout_gain)},
                       {"seconds", t.seconds}, {"message", t.message}, {"named", named}, {"named_values", named_values}});
     if (t.second) {
       trials.back()["second"] = {{"concealed", t.second->effect}, {"value", t.second->value}};
@@ -390,8 +420,8 @@ nlohmann::json to_json(const BlindtestResult& r) {
     if (!t.truth_location.empty()) {
       trials.back()["truth_location"] = t.truth_location;
       trials.back()["located"] = t.located;
-      trials.back()["signature_rms_mm"] = num(t.signature_rms_mm);
-      trials.back()["model_error_mm"] = num(t.model_error_mm);
+      trials.back()["signature_rms_mm"] = json_number(t.signature_rms_mm);
+      trials.back()["model_error_mm"] = json_number(t.model_error_mm);
       trials.back()["below_model_error"] = t.below_model_error;
     }
     trials.back()["below_threshold"] = t.below_threshold;

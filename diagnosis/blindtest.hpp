@@ -97,6 +97,9 @@ struct Trial {
   std::optional<ConcealedEffect> second;  // two-effect trials
   std::string verdict;
   std::string reason;               // the diagnosis' one sentence on how the verdict was reached
+  // The verdict's form across the recordings (pipeline step 5): "holds" or "does not hold", and
+  // per recording the estimate ± its deviation and what the model's error could move it by (θ).
+  std::string form;
   // The diagnosis' explanation, the verdict first and any further effects, each with its jointly
   // refitted parameter in the catalog's units.
   std::vector<EffectValue> named;

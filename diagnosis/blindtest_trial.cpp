@@ -178,6 +178,13 @@ void run_trial(const TrialContext& c, Trial& trial) {
   if (!d.ok) throw std::runtime_error(d.message);
   trial.verdict = d.verdict;
   trial.reason = d.reason;
+  if (d.form) {
+    trial.form = d.form->effect + (d.form->holds ? " holds:" : " does not hold:");
+    for (const auto& e : d.form->estimates) {
+      trial.form += " " + e.recording + " " + format_g(e.parameter.value, 4) + " ± " + format_g(e.departure_std, 2) +
+                    " (model error " + format_g(e.model_error, 2) + ")";
+    }
+  }
   trial.named.clear();
   for (const auto& e : d.explanation) trial.named.push_back({e.name, e.parameter.value});
   // Realistic recordings hold no gate position: a twin of the concealed effect is as right.

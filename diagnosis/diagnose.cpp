@@ -349,18 +349,22 @@ std::vector<RecordingEstimate> Engine::per_recording_estimates(const std::string
     if (!carried_inflow_m3s_.empty()) engine.carried_inflow_m3s_ = {carried_inflow_m3s_.at(i)};
     engine.nominal_residuals();
     const EffectResult fitted = engine.explain(name);
+    const auto best = engine.best_.find(name);
+    if (best == engine.best_.end()) {  // not fitted (the scenario cannot carry it): no estimate
+      const double none = std::numeric_limits<double>::quiet_NaN();
+      out[i] = {recs_.at(i).name, fitted.parameter, none, none, none};
+      return;
+    }
     const double theta = to_theta(effect, fitted.parameter.value);
     const double per_theta = parameter_per_theta(effect, theta);
     out[i] = {recs_.at(i).name, fitted.parameter, theta - effect.kind->theta_none,
-              per_theta > 0.0 ? fitted.parameter.std / per_theta : std::numeric_limits<double>::quiet_NaN()};
+              per_theta > 0.0 ? fitted.parameter.std / per_theta : std::numeric_limits<double>::quiet_NaN(),
+              engine.model_error_theta(effect, best->second)};
   });
   return out;
 }
 
-// Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
-// point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
-// parameter's unit.
-double Engine::parameter_std(const Effect& effect, const Point& best) const {
+double Engine::sensitivity(const Effect& effect, const Point& best) const {
   double jj = 0.0;
   const double d_theta = best.theta - (std::isnan(nominal_point_.theta) ? effect.kind->theta_none : nominal_point_.theta);
   if (std::abs(d_theta) > 0.0) {
@@ -369,10 +373,36 @@ double Engine::parameter_std(const Effect& effect, const Point& best) const {
       jj += j * j;
     }
   }
+  return jj;
+}
+
+// Uncertainty of the parameter: the residual sensitivity between the estimate and the nominal
+// point (a secant Jacobian), inflated by the residual correlation, mapped from θ to the
+// parameter's unit.
+double Engine::parameter_std(const Effect& effect, const Point& best) const {
+  const double jj = sensitivity(effect, best);
   if (!(jj > 0.0) || best.r.size() <= 1) return 0.0;
   const double sse = std::inner_product(best.r.begin(), best.r.end(), best.r.begin(), 0.0);
   const double theta_sd = std::sqrt(sse / static_cast<double>(best.r.size() - 1) / jj * inflation_);
   return theta_sd * parameter_per_theta(effect, best.theta);
+}
+
+// The bound of the bias a model error e puts on a least-squares θ: |Δθ| = |e·j| / |j|² <= |e| / |j|
+// (Cauchy–Schwarz), with |e|² the baseline's residual energy over the fitted parts, channel by
+// channel in the cost's weights.
+double Engine::model_error_theta(const Effect& effect, const Point& best) const {
+  double energy = 0.0;
+  for (const auto& p : recs_) {
+    for (const auto& [name, y] : p.data) {
+      if (!calibration::is_level(name)) continue;
+      const auto own = o_.baseline_rms_by_channel.find(name);
+      const double rms = own != o_.baseline_rms_by_channel.end() && own->second > 0.0 ? own->second : o_.baseline_rms_mm;
+      energy += weight_.at(name) * rms * rms * static_cast<double>(p.n_fit);
+    }
+  }
+  if (energy == 0.0) return 0.0;
+  const double jj = sensitivity(effect, best);
+  return jj > 0.0 ? std::sqrt(energy / jj) : std::numeric_limits<double>::infinity();
 }
 
 // Whether the effect moves the calibrated physics by more than calibrated_z standard deviations of

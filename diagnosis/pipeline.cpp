@@ -258,7 +258,7 @@ bool verdict_form_holds(Explainer& explainer, const PipelineSettings& settings, 
 std::optional<FormCheck> check_form(const std::string& effect, std::vector<RecordingEstimate> estimates,
                                     const PipelineSettings& settings) {
   const bool all_finite = std::all_of(estimates.begin(), estimates.end(), [](const RecordingEstimate& e) {
-    return std::isfinite(e.departure) && std::isfinite(e.departure_std);
+    return std::isfinite(e.departure) && std::isfinite(e.departure_std) && std::isfinite(e.model_error);
   });
   if (estimates.size() < 2 || !all_finite) return std::nullopt;
   FormCheck f;
@@ -272,7 +272,8 @@ std::optional<FormCheck> check_form(const std::string& effect, std::vector<Recor
   const double spread = high->departure - low->departure;
   f.relative_spread = mean != 0.0 ? spread / std::abs(mean) : std::numeric_limits<double>::quiet_NaN();
   const double spread_std = std::hypot(low->departure_std, high->departure_std);
-  f.holds = !(spread > settings.form_spread * std::abs(mean) && spread > settings.form_z * spread_std);
+  f.holds = !(spread > settings.form_spread * std::abs(mean) && spread > settings.form_z * spread_std &&
+              spread > settings.form_model_error * (low->model_error + high->model_error));
   return f;
 }
 

@@ -1,5 +1,6 @@
 #include "diagnosis/report.hpp"
 
+#include "core/json.hpp"
 #include "core/format.hpp"
 #include "core/html.hpp"
 
@@ -13,8 +14,6 @@ namespace {
 
 using nlohmann::json;
 
-// JSON has no NaN/inf: such values become null.
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json correlation_json(const CorrelationTest& t) {
   return json{{"bound", t.bound}, {"outside", t.outside}, {"allowed", t.allowed}, {"pass", t.pass},
@@ -32,7 +31,7 @@ json mismatch_json(const Mismatch& m) {
     json channels = json::object();
     for (const auto& c : r.channels) channels[c.name] = {{"rms", c.rms}, {"mean", c.mean}};
     by_recording.push_back({{"recording", r.name}, {"operating_point_mm", r.operating_point_mm},
-                            {"nrmse_percent", number(r.nrmse_percent)}, {"rms_mm", r.rms}, {"mean_mm", r.mean},
+                            {"nrmse_percent", json_number(r.nrmse_percent)}, {"rms_mm", r.rms}, {"mean_mm", r.mean},
                             {"free_fraction", r.free_fraction < 0.0 ? json(nullptr) : json(r.free_fraction)},
                             {"white", r.white}, {"uncorrelated_with_input", r.uncorrelated}, {"channels", channels}});
   }
@@ -49,8 +48,6 @@ json mismatch_json(const Mismatch& m) {
               {"by_level", groups(m.by_level)}, {"by_channel", by_channel}};
 }
 
-// A figure of the report; "-" where there is none.
-std::string fixed(double v, int digits = 3) { return std::isfinite(v) ? format_fixed(v, digits) : "-"; }
 
 struct Line {
   const std::vector<double>* y;
@@ -77,23 +74,23 @@ std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& line
   std::ostringstream s;
   s << "<svg viewBox='0 0 " << width << ' ' << height << "' width='100%' xmlns='http://www.w3.org/2000/svg'>";
   for (const auto& [a, b] : spans) {
-    s << "<rect x='" << fixed(X(a), 1) << "' y='" << top << "' width='" << fixed(std::max(1.0, X(b) - X(a)), 1)
+    s << "<rect x='" << format_figure(X(a), 1) << "' y='" << top << "' width='" << format_figure(std::max(1.0, X(b) - X(a)), 1)
       << "' height='" << height - top - bottom << "' fill='#fde2c8'/>";
   }
   if (split_t > t0 && split_t < t1) {
-    s << "<line x1='" << fixed(X(split_t), 1) << "' x2='" << fixed(X(split_t), 1) << "' y1='" << top << "' y2='"
-      << height - bottom << "' stroke='#999' stroke-dasharray='4 3'/><text x='" << fixed(X(split_t) + 4, 1)
+    s << "<line x1='" << format_figure(X(split_t), 1) << "' x2='" << format_figure(X(split_t), 1) << "' y1='" << top << "' y2='"
+      << height - bottom << "' stroke='#999' stroke-dasharray='4 3'/><text x='" << format_figure(X(split_t) + 4, 1)
       << "' y='" << top + 12 << "' font-size='11' fill='#666'>held-out &#8594;</text>";
   }
   s << "<rect x='" << left << "' y='" << top << "' width='" << width - left - right << "' height='"
     << height - top - bottom << "' fill='none' stroke='#444'/>";
   for (int k = 0; k <= 4; ++k) {
     const double v = lo + (hi - lo) * k / 4.0;
-    s << "<text x='" << left - 4 << "' y='" << fixed(Y(v) + 4, 1) << "' font-size='10' text-anchor='end'>"
-      << fixed(v, 2) << "</text>";
+    s << "<text x='" << left - 4 << "' y='" << format_figure(Y(v) + 4, 1) << "' font-size='10' text-anchor='end'>"
+      << format_figure(v, 2) << "</text>";
     const double tv = t0 + (t1 - t0) * k / 4.0;
-    s << "<text x='" << fixed(X(tv), 1) << "' y='" << height - 12 << "' font-size='10' text-anchor='middle'>"
-      << fixed(tv, 0) << "</text>";
+    s << "<text x='" << format_figure(X(tv), 1) << "' y='" << height - 12 << "' font-size='10' text-anchor='middle'>"
+      << format_figure(tv, 0) << "</text>";
   }
   s << "<text x='12' y='" << top + 100 << "' font-size='11' transform='rotate(-90 12 " << top + 100 << ")'>"
     << html::escape(y_label) << "</text><text x='" << width / 2 << "' y='" << height - 1
@@ -102,8 +99,8 @@ std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& line
   double legend_x = left + 8;
   for (const auto& l : lines) {
     s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
-    for (std::size_t k = 0; k < t.size(); k += stride) s << fixed(X(t[k]), 1) << ',' << fixed(Y((*l.y)[k]), 1) << ' ';
-    s << "'/><text x='" << fixed(legend_x, 1) << "' y='" << height - bottom - 6 << "' font-size='11' fill='"
+    for (std::size_t k = 0; k < t.size(); k += stride) s << format_figure(X(t[k]), 1) << ',' << format_figure(Y((*l.y)[k]), 1) << ' ';
+    s << "'/><text x='" << format_figure(legend_x, 1) << "' y='" << height - bottom - 6 << "' font-size='11' fill='"
       << l.colour << "'>" << html::escape(l.label) << "</text>";
     legend_x += 9.0 * static_cast<double>(l.label.size()) + 20.0;
   }
@@ -118,8 +115,8 @@ namespace {
 json thresholds_json(const Diagnosis& d) {
   json out = json::array();
   for (const auto& t : d.thresholds) {
-    out.push_back({{"effect", t.effect}, {"parameter", t.parameter}, {"unit", t.unit}, {"revealed_at_or_below", number(t.below)},
-                   {"revealed_at_or_above", number(t.above)}});
+    out.push_back({{"effect", t.effect}, {"parameter", t.parameter}, {"unit", t.unit}, {"revealed_at_or_below", json_number(t.below)},
+                   {"revealed_at_or_above", json_number(t.above)}});
   }
   return out;
 }
@@ -138,16 +135,16 @@ json to_json(const Diagnosis& d) {
   json effects = json::array();
   for (const auto& e : d.effects) {
     json parameters = json::object();
-    parameters[e.parameter.name] = {{"value", number(e.parameter.value)}, {"std", number(e.parameter.std)},
+    parameters[e.parameter.name] = {{"value", json_number(e.parameter.value)}, {"std", json_number(e.parameter.std)},
                                     {"unit", e.parameter.unit}};
-    effects.push_back({{"name", e.name}, {"score", number(e.score)}, {"significant", e.significant},
+    effects.push_back({{"name", e.name}, {"score", json_number(e.score)}, {"significant", e.significant},
                        {"material", e.material}, {"parameters", parameters},
-                       {"nrmse_before", number(e.nrmse_before)}, {"nrmse_after", number(e.nrmse_after)},
-                       {"heldout_nrmse_before", number(e.heldout_nrmse_before)},
-                       {"heldout_nrmse_after", number(e.heldout_nrmse_after)},
-                       {"cost_before", number(e.cost_before)}, {"cost_after", number(e.cost_after)},
-                       {"heldout_cost_before", number(e.heldout_cost_before)},
-                       {"heldout_cost_after", number(e.heldout_cost_after)}, {"delta_bic", number(e.delta_bic)},
+                       {"nrmse_before", json_number(e.nrmse_before)}, {"nrmse_after", json_number(e.nrmse_after)},
+                       {"heldout_nrmse_before", json_number(e.heldout_nrmse_before)},
+                       {"heldout_nrmse_after", json_number(e.heldout_nrmse_after)},
+                       {"cost_before", json_number(e.cost_before)}, {"cost_after", json_number(e.cost_after)},
+                       {"heldout_cost_before", json_number(e.heldout_cost_before)},
+                       {"heldout_cost_after", json_number(e.heldout_cost_after)}, {"delta_bic", json_number(e.delta_bic)},
                        {"simulations", e.simulations}, {"note", e.note},
                        {"heldout_improves", e.heldout_improves}, {"set_aside", e.set_aside}});
   }
@@ -165,25 +162,25 @@ json to_json(const Diagnosis& d) {
   json scales = json::object();
   for (const auto& [c, s] : d.channel_scale) scales[c] = s;
   const auto parameter_json = [](const ParameterEstimate& p) {
-    return json{{p.name, {{"value", number(p.value)}, {"std", number(p.std)}, {"unit", p.unit}}}};
+    return json{{p.name, {{"value", json_number(p.value)}, {"std", json_number(p.std)}, {"unit", p.unit}}}};
   };
   json explanation = json::array();
   for (const auto& e : d.explanation) {
-    explanation.push_back({{"name", e.name}, {"parameters", parameter_json(e.parameter)}, {"score", number(e.score)},
-                           {"share", number(e.share)}});
+    explanation.push_back({{"name", e.name}, {"parameters", parameter_json(e.parameter)}, {"score", json_number(e.score)},
+                           {"share", json_number(e.share)}});
   }
   json ambiguous = json::array();
   for (const auto& a : d.ambiguous) {
     ambiguous.push_back({{"effects", {a.first, a.second}},
                          {"estimates", {{a.first, parameter_json(a.first_parameter)[a.first_parameter.name]},
                                         {a.second, parameter_json(a.second_parameter)[a.second_parameter.name]}}},
-                         {"scores", {number(a.first_score), number(a.second_score)}},
+                         {"scores", {json_number(a.first_score), json_number(a.second_score)}},
                          {"separating_experiment", a.separating_experiment}});
   }
   json channels = json::array();
   for (const auto& c : d.channels) {
-    channels.push_back({{"name", c.name}, {"nominal_rms_mm", number(c.rms)}, {"noise_mm", number(c.noise)},
-                        {"tolerated_mm", number(c.tolerated)}, {"ordinary", c.ordinary}});
+    channels.push_back({{"name", c.name}, {"nominal_rms_mm", json_number(c.rms)}, {"noise_mm", json_number(c.noise)},
+                        {"tolerated_mm", json_number(c.tolerated)}, {"ordinary", c.ordinary}});
   }
   // The candidates that scored above the verdict and why each was passed over.
   json passed_over = json::array();
@@ -193,7 +190,7 @@ json to_json(const Diagnosis& d) {
   }
   for (const auto& e : d.effects) {
     if (!e.significant && e.note.empty() && e.score > verdict_score) {
-      passed_over.push_back({{"name", e.name}, {"score", number(e.score)}, {"why", e.set_aside}});
+      passed_over.push_back({{"name", e.name}, {"score", json_number(e.score)}, {"why", e.set_aside}});
     }
   }
   json out{{"ok", d.ok}, {"verdict", d.verdict}, {"reason", d.reason}, {"explanation", explanation},
@@ -201,28 +198,29 @@ json to_json(const Diagnosis& d) {
            {"lowering_experiment", d.lowering_experiment},
            {"ambiguous", ambiguous}, {"effects", effects},
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
-           {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", number(d.noise_limit_nrmse)},
+           {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", json_number(d.noise_limit_nrmse)},
            {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
   if (d.form) {
     json estimates = json::array();
     for (const auto& e : d.form->estimates) {
-      estimates.push_back({{"recording", e.recording}, {"value", number(e.parameter.value)}, {"std", number(e.parameter.std)},
-                           {"departure", number(e.departure)}, {"departure_std", number(e.departure_std)}});
+      estimates.push_back({{"recording", e.recording}, {"value", json_number(e.parameter.value)}, {"std", json_number(e.parameter.std)},
+                           {"departure", json_number(e.departure)}, {"departure_std", json_number(e.departure_std)},
+                           {"model_error", json_number(e.model_error)}});
     }
     out["form"] = {{"effect", d.form->effect}, {"holds", d.form->holds},
-                   {"relative_spread", number(d.form->relative_spread)}, {"per_recording", estimates}};
+                   {"relative_spread", json_number(d.form->relative_spread)}, {"per_recording", estimates}};
   }
   if (d.unexplained) {
     json models = json::array();
     for (const auto& m : d.unexplained->discrepancy) {
       models.push_back({{"channel", m.channel}, {"found", m.found}, {"form", m.form}, {"poles", m.poles},
-                        {"numerator", m.numerator}, {"delay_s", number(m.delay_s)}, {"static_gain", number(m.static_gain)},
-                        {"a", m.a}, {"b", m.b}, {"offsets_mm", m.offsets}, {"peak_hz", number(m.peak_hz)},
-                        {"band_hz", {number(m.band_low_hz), number(m.band_high_hz)}},
-                        {"heldout_rms_before_mm", number(m.heldout_rms_before)},
-                        {"heldout_rms_after_mm", number(m.heldout_rms_after)},
-                        {"heldout_share_removed", number(m.heldout_share_removed)},
-                        {"offsets_share_removed", number(m.offsets_share_removed)}});
+                        {"numerator", m.numerator}, {"delay_s", json_number(m.delay_s)}, {"static_gain", json_number(m.static_gain)},
+                        {"a", m.a}, {"b", m.b}, {"offsets_mm", m.offsets}, {"peak_hz", json_number(m.peak_hz)},
+                        {"band_hz", {json_number(m.band_low_hz), json_number(m.band_high_hz)}},
+                        {"heldout_rms_before_mm", json_number(m.heldout_rms_before)},
+                        {"heldout_rms_after_mm", json_number(m.heldout_rms_after)},
+                        {"heldout_share_removed", json_number(m.heldout_share_removed)},
+                        {"offsets_share_removed", json_number(m.offsets_share_removed)}});
     }
     out["unexplained"] = {{"channel", d.unexplained->channel}, {"summary", d.unexplained->summary},
                           {"where", mismatch_json(d.unexplained->where)}, {"discrepancy_models", models}};
@@ -242,7 +240,7 @@ std::string text_summary(const Diagnosis& d) {
     s << "explanation:";
     for (const auto& e : d.explanation) {
       s << "  " << e.name << " (" << e.parameter.name << " " << format_estimate(e.parameter.value, e.parameter.std) << " "
-        << e.parameter.unit << ", removes " << fixed(100.0 * e.share, 0) << "%)";
+        << e.parameter.unit << ", removes " << format_figure(100.0 * e.share, 0) << "%)";
     }
     s << '\n';
   }
@@ -252,11 +250,11 @@ std::string text_summary(const Diagnosis& d) {
       << " " << a.second_parameter.unit << ") explain the residual about equally; to tell them apart: "
       << a.separating_experiment << '\n';
   }
-  s << "noise " << fixed(d.noise, 3) << " mm, nominal residual RMS " << fixed(d.nominal_rms, 3)
-    << " mm, noise-limited Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%\n";
+  s << "noise " << format_figure(d.noise, 3) << " mm, nominal residual RMS " << format_figure(d.nominal_rms, 3)
+    << " mm, noise-limited Nrmse " << format_figure(d.noise_limit_nrmse, 1) << "%\n";
   for (const auto& c : d.channels) {
-    s << "  " << c.name << ": nominal RMS " << fixed(c.rms, 3) << " mm, noise " << fixed(c.noise, 3) << " mm"
-      << (c.tolerated > 0.0 ? ", tolerated " + fixed(c.tolerated, 3) + " mm" : std::string())
+    s << "  " << c.name << ": nominal RMS " << format_figure(c.rms, 3) << " mm, noise " << format_figure(c.noise, 3) << " mm"
+      << (c.tolerated > 0.0 ? ", tolerated " + format_figure(c.tolerated, 3) + " mm" : std::string())
       << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
   }
   if (d.form && d.form->holds) {
@@ -272,7 +270,7 @@ std::string text_summary(const Diagnosis& d) {
   }
   const json document = to_json(d);  // kept alive: a range over a member of a temporary would dangle
   for (const auto& e : document["passed_over"]) {
-    s << "set aside: " << e["name"].get<std::string>() << " (score " << fixed(e["score"].is_number() ? e["score"].get<double>() : std::nan(""), 2)
+    s << "set aside: " << e["name"].get<std::string>() << " (score " << format_figure(e["score"].is_number() ? e["score"].get<double>() : std::nan(""), 2)
       << "): " << e["why"].get<std::string>() << '\n';
   }
   s << '\n';
@@ -292,29 +290,29 @@ std::string text_summary(const Diagnosis& d) {
     const std::string p = format_estimate(e.parameter.value, e.parameter.std) + " " + e.parameter.unit;
     // An index that is not defined (Nrmse of a part whose levels do not vary) prints as "-".
     std::snprintf(line, sizeof line, "%-*s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, e.name.c_str(),
-                  fixed(e.score).c_str(), e.significant ? "yes" : "", p.c_str(), fixed(e.nrmse_before, 2).c_str(),
-                  fixed(e.nrmse_after, 2).c_str(), fixed(e.heldout_nrmse_before, 2).c_str(),
-                  fixed(e.heldout_nrmse_after, 2).c_str(), fixed(e.delta_bic, 0).c_str());
+                  format_figure(e.score, 3).c_str(), e.significant ? "yes" : "", p.c_str(), format_figure(e.nrmse_before, 2).c_str(),
+                  format_figure(e.nrmse_after, 2).c_str(), format_figure(e.heldout_nrmse_before, 2).c_str(),
+                  format_figure(e.heldout_nrmse_after, 2).c_str(), format_figure(e.delta_bic, 0).c_str());
     s << line;
   }
   s << "\nwhere the nominal residual lives:\n";
   if (d.mismatch.band.found) {
-    s << "  band " << fixed(d.mismatch.band.low_hz, 3) << "-" << fixed(d.mismatch.band.high_hz, 3) << " Hz\n";
+    s << "  band " << format_figure(d.mismatch.band.low_hz, 3) << "-" << format_figure(d.mismatch.band.high_hz, 3) << " Hz\n";
   } else {
     s << "  no frequency band where the input->residual model is significant\n";
   }
   for (const auto& r : d.mismatch.by_recording) {
-    s << "  " << r.name << " (op " << fixed(r.operating_point_mm, 1) << " mm): Nrmse " << fixed(r.nrmse_percent, 2)
-      << "%, RMS " << fixed(r.rms, 3) << " mm, mean " << fixed(r.mean, 3) << " mm" << (r.white ? "" : ", not white")
+    s << "  " << r.name << " (op " << format_figure(r.operating_point_mm, 1) << " mm): Nrmse " << format_figure(r.nrmse_percent, 2)
+      << "%, RMS " << format_figure(r.rms, 3) << " mm, mean " << format_figure(r.mean, 3) << " mm" << (r.white ? "" : ", not white")
       << (r.uncorrelated ? "" : ", correlated with u") << '\n';
   }
   for (const auto& g : d.mismatch.by_regime) {
-    if (g.samples) s << "  regime " << g.name << ": RMS " << fixed(g.rms, 3) << " mm over " << g.samples << " samples\n";
+    if (g.samples) s << "  regime " << g.name << ": RMS " << format_figure(g.rms, 3) << " mm over " << g.samples << " samples\n";
   }
   for (std::size_t k = 0; k < d.mismatch.windows.size() && k < 5; ++k) {
     const auto& w = d.mismatch.windows[k];
-    s << "  window " << w.recording << " " << fixed(w.start_s, 1) << "-" << fixed(w.end_s, 1) << " s: RMS "
-      << fixed(w.rms, 3) << " mm;";
+    s << "  window " << w.recording << " " << format_figure(w.start_s, 1) << "-" << format_figure(w.end_s, 1) << " s: RMS "
+      << format_figure(w.rms, 3) << " mm;";
     for (const auto& e : w.events) s << ' ' << e;
     s << '\n';
   }
@@ -337,16 +335,16 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
     s << "<p>Where the unexplained residual lives: " << html::escape(d.unexplained->summary)
       << ". The discrepancy model describes the residual; it is not physics.</p>";
   }
-  s << "<p>Measurement noise " << fixed(d.noise) << " mm; nominal residual RMS " << fixed(d.nominal_rms)
-    << " mm; a perfect model would reach Nrmse " << fixed(d.noise_limit_nrmse, 1) << "%.</p>";
+  s << "<p>Measurement noise " << format_figure(d.noise, 3) << " mm; nominal residual RMS " << format_figure(d.nominal_rms, 3)
+    << " mm; a perfect model would reach Nrmse " << format_figure(d.noise_limit_nrmse, 1) << "%.</p>";
   s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>parameter</th><th>Nrmse fitted</th>"
        "<th>after</th><th>Nrmse held-out</th><th>after</th><th>&#916;BIC</th></tr>";
   for (const auto& e : d.effects) {
-    s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << html::escape(e.name) << "</td><td>" << fixed(e.score)
+    s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << html::escape(e.name) << "</td><td>" << format_figure(e.score, 3)
       << "</td><td>" << html::escape(e.parameter.name) << " = " << html::escape(format_estimate(e.parameter.value, e.parameter.std))
-      << ' ' << html::escape(e.parameter.unit) << "</td><td>" << fixed(e.nrmse_before, 2)
-      << "</td><td>" << fixed(e.nrmse_after, 2) << "</td><td>" << fixed(e.heldout_nrmse_before, 2) << "</td><td>"
-      << fixed(e.heldout_nrmse_after, 2) << "</td><td>" << fixed(e.delta_bic, 0) << "</td></tr>";
+      << ' ' << html::escape(e.parameter.unit) << "</td><td>" << format_figure(e.nrmse_before, 2)
+      << "</td><td>" << format_figure(e.nrmse_after, 2) << "</td><td>" << format_figure(e.heldout_nrmse_before, 2) << "</td><td>"
+      << format_figure(e.heldout_nrmse_after, 2) << "</td><td>" << format_figure(e.delta_bic, 0) << "</td></tr>";
   }
   s << "</table>";
   if (!d.thresholds.empty()) {
@@ -361,14 +359,14 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
   }
   s << "<h2>Where the mismatch lives</h2><p>";
   if (d.mismatch.band.found) {
-    s << "Input&#8594;residual model significant in " << fixed(d.mismatch.band.low_hz) << "&#8211;"
-      << fixed(d.mismatch.band.high_hz) << " Hz";
+    s << "Input&#8594;residual model significant in " << format_figure(d.mismatch.band.low_hz, 3) << "&#8211;"
+      << format_figure(d.mismatch.band.high_hz, 3) << " Hz";
   } else {
     s << "No frequency band where the input&#8594;residual model leaves its 99% region";
   }
   if (d.mismatch_after.band.found) {
-    s << "; after the correction: " << fixed(d.mismatch_after.band.low_hz) << "&#8211;"
-      << fixed(d.mismatch_after.band.high_hz) << " Hz.";
+    s << "; after the correction: " << format_figure(d.mismatch_after.band.low_hz, 3) << "&#8211;"
+      << format_figure(d.mismatch_after.band.high_hz, 3) << " Hz.";
   } else {
     s << "; none after the correction.";
   }
@@ -377,18 +375,18 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
   for (std::size_t i = 0; i < d.mismatch.by_recording.size(); ++i) {
     const auto& b = d.mismatch.by_recording[i];
     const auto& a = d.mismatch_after.by_recording[i];
-    s << "<tr><td>" << html::escape(b.name) << "</td><td>" << fixed(b.operating_point_mm, 1) << "</td><td>"
-      << fixed(b.nrmse_percent, 2) << "</td><td>" << fixed(a.nrmse_percent, 2) << "</td><td>" << fixed(b.rms)
-      << "</td><td>" << fixed(a.rms) << "</td><td>" << (b.white ? "yes" : "no") << " / " << (a.white ? "yes" : "no")
+    s << "<tr><td>" << html::escape(b.name) << "</td><td>" << format_figure(b.operating_point_mm, 1) << "</td><td>"
+      << format_figure(b.nrmse_percent, 2) << "</td><td>" << format_figure(a.nrmse_percent, 2) << "</td><td>" << format_figure(b.rms, 3)
+      << "</td><td>" << format_figure(a.rms, 3) << "</td><td>" << (b.white ? "yes" : "no") << " / " << (a.white ? "yes" : "no")
       << "</td></tr>";
   }
   s << "</table><p>By regime:";
   for (const auto& g : d.mismatch.by_regime) {
-    if (g.samples) s << ' ' << html::escape(g.name) << " RMS " << fixed(g.rms) << " mm (" << g.samples << " samples);";
+    if (g.samples) s << ' ' << html::escape(g.name) << " RMS " << format_figure(g.rms, 3) << " mm (" << g.samples << " samples);";
   }
   s << " by event:";
   for (const auto& g : d.mismatch.by_event) {
-    if (g.samples) s << ' ' << html::escape(g.name) << ' ' << fixed(g.rms) << " mm;";
+    if (g.samples) s << ' ' << html::escape(g.name) << ' ' << format_figure(g.rms, 3) << " mm;";
   }
   s << "</p>";
   for (const auto& r : d.series) {

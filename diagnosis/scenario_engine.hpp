@@ -118,7 +118,13 @@ class Engine final : public Explainer {
   JointFit fit_jointly(std::vector<EffectAt> start, const std::vector<bool>& free);
   std::optional<JointExplanation> explain_on_top(const std::vector<ExplainedEffect>& explanation,
                                                  const std::string& candidate) const;
+  // |∂r/∂θ|² of the fitted-part residual vector: the secant between the estimate and the nominal
+  // point (0 when they coincide).
+  double sensitivity(const Effect& effect, const Point& best) const;
   double parameter_std(const Effect& effect, const Point& best) const;
+  // How far the calibration's residual on its baseline (DiagnoseOptions::baseline_rms_*) could
+  // move θ, were it all along the effect's signature: |e| / |∂r/∂θ| (0 uncalibrated).
+  double model_error_theta(const Effect& effect, const Point& best) const;
   bool beyond_calibration(const Effect& effect, double parameter) const;
   // The recorded level channels an effect reads: its own channel, or every level channel.
   std::vector<std::string> channels_of(const Effect& effect) const;

@@ -182,17 +182,21 @@ TEST(FormAcrossRecordings, AConstantShareOfTheInflowHoldsAtEveryOperatingPoint) 
   for (const auto& e : d.form->estimates) EXPECT_NEAR(e.parameter.value, 0.08, 0.01) << e.recording;
 }
 
-// The rule on its own (pipeline.hpp check_form): a spread beyond both its share of the mean
-// departure and its standard deviations breaks the form; either alone does not.
-TEST(FormAcrossRecordings, TheRuleNeedsASpreadBeyondItsShareAndItsStandardDeviations) {
-  const auto estimates = [](double a, double b, double sd) {
-    return std::vector<RecordingEstimate>{{"op1", {"share", "-", a, sd}, a, sd}, {"op3", {"share", "-", b, sd}, b, sd}};
+// The rule on its own (pipeline.hpp check_form): a spread beyond its share of the mean departure,
+// its standard deviations and what the model's error could move the estimates by breaks the
+// form; any one alone does not.
+TEST(FormAcrossRecordings, TheRuleNeedsASpreadBeyondItsShareItsDeviationsAndTheModelsError) {
+  const auto estimates = [](double a, double b, double sd, double model_error = 0.0) {
+    return std::vector<RecordingEstimate>{{"op1", {"share", "-", a, sd}, a, sd, model_error},
+                                          {"op3", {"share", "-", b, sd}, b, sd, model_error}};
   };
   const PipelineSettings settings;  // spread share 0.5, 4 standard deviations
   EXPECT_FALSE(check_form("x", estimates(0.10, 0.20, 0.005), settings)->holds);
   EXPECT_TRUE(check_form("x", estimates(0.10, 0.12, 0.001), settings)->holds);   // within its share
   EXPECT_TRUE(check_form("x", estimates(0.10, 0.20, 0.05), settings)->holds);    // within its deviations
   EXPECT_FALSE(check_form("x", estimates(-0.10, 0.10, 0.001), settings)->holds); // of both signs
+  EXPECT_TRUE(check_form("x", estimates(0.10, 0.20, 0.005, 0.11), settings)->holds);  // within the model's error
+  EXPECT_FALSE(check_form("x", estimates(0.10, 0.20, 0.005, 0.09), settings)->holds);
   EXPECT_FALSE(check_form("x", {estimates(0.1, 0.2, 0.01).front()}, settings).has_value());
   EXPECT_FALSE(check_form("x", estimates(0.10, std::nan(""), 0.01), settings).has_value());
 }
