@@ -65,7 +65,7 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
     if (header >= -1) {
       lines.insert(lines.begin() + (header + 1), written);
     } else if (table.find('[') != std::string::npos) {
-      throw InputError("calibrated scenario: the file has no table " + table + " for " + e.key);
+      throw InputError("scenario key " + e.key + ": the file has no table " + table + " to hold it");
     } else {
       lines.push_back("");
       lines.push_back("[" + table + "]");

@@ -275,7 +275,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
   args->format.add_options(cmd);
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
-  cmd->add_option("--candidates", args->candidates, "Catalog effects to try, e.g. gate_leakage sensor_offset[y_dwe_mm]; a per-channel effect without [CHANNEL] is tried on every level channel (default: all; docs/diagnosis.md, section 4)");
+  cmd->add_option("--candidates", args->candidates, "Catalog effects to try, e.g. gate_leakage sensor_offset[y_dwe_mm]; a per-channel effect without [CHANNEL] is tried on every level channel (default: all; docs/diagnosis.md, section 4)")
+      ->delimiter(',');
   cmd->add_option("--fit-fraction", args->fit_fraction, "Leading share of each recording used for fitting (default 0.5)")
       ->check(number_in(0.11, 0.89, "a fraction"));
   cmd->add_option("--threads", args->threads, "Recordings simulated in parallel (default 2)")->check(thread_count());

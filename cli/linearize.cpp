@@ -27,25 +27,10 @@ struct LinearizeArguments {
   int poles = 6;
 };
 
-double phase_degrees(std::complex<double> g) { return std::arg(g) * 180.0 / M_PI; }
-
-// Unwrapped phase [deg] along the grid (continuous through ±180°).
-std::vector<double> unwrapped_phase(const std::vector<std::complex<double>>& g) {
-  std::vector<double> phase(g.size());
-  for (std::size_t k = 0; k < g.size(); ++k) {
-    phase[k] = phase_degrees(g[k]);
-    if (k > 0) {
-      while (phase[k] - phase[k - 1] > 180.0) phase[k] -= 360.0;
-      while (phase[k] - phase[k - 1] < -180.0) phase[k] += 360.0;
-    }
-  }
-  return phase;
-}
-
 std::string csv_text(const linearize::FrequencyResponse& r) {
   std::ostringstream out;
   out << "omega_rad_s,gain,phase_deg,real,imag\n";
-  const auto phase = unwrapped_phase(r.response);
+  const auto phase = linearize::unwrapped_phase_degrees(r.response);
   for (std::size_t k = 0; k < r.omega.size(); ++k) {
     out << format_g(r.omega[k], 10) << ',' << format_g(std::abs(r.response[k]), 10) << ','
         << format_g(phase[k], 10) << ',' << format_g(r.response[k].real(), 10) << ','
@@ -76,7 +61,7 @@ std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArgu
                                 {"rms_relative_error", f.rms_relative_error}}},
                       {"liom_rms_relative_error", f.integer_rms_relative_error}};
   }
-  const auto phase = unwrapped_phase(r.response);
+  const auto phase = linearize::unwrapped_phase_degrees(r.response);
   for (std::size_t k = 0; k < r.omega.size(); ++k) {
     j["response"].push_back({{"omega_rad_s", r.omega[k]}, {"gain", number(std::abs(r.response[k]))},
                              {"phase_deg", phase[k]}, {"real", number(r.response[k].real())},
@@ -103,7 +88,7 @@ void print_summary(const linearize::FrequencyResponse& r, const LinearizeArgumen
   std::cout << "  poles nearest the imaginary axis [1/s]:";
   for (const auto& p : r.poles) std::cout << "  " << format_g(p.real(), 4) << (p.imag() >= 0 ? "+" : "") << format_g(p.imag(), 4) << "i";
   std::cout << "\n  omega [rad/s]      gain    phase [deg]\n";
-  const auto phase = unwrapped_phase(r.response);
+  const auto phase = linearize::unwrapped_phase_degrees(r.response);
   const std::size_t step = std::max<std::size_t>(1, r.omega.size() / 10);
   for (std::size_t k = 0; k < r.omega.size(); k += step) {
     std::cout << "  " << format_g(r.omega[k], 4) << "  " << format_g(std::abs(r.response[k]), 5) << "  "

@@ -119,6 +119,10 @@ double delay_from_phase(const std::vector<double>& omega, const std::vector<std:
 
 std::vector<double> log_grid(const FrequencyGrid& grid);
 
+// The phase of G along the grid [deg], unwrapped: continuous through ±180°, so that a delay's
+// phase falls without bound as it does.
+std::vector<double> unwrapped_phase_degrees(const std::vector<std::complex<double>>& response);
+
 // Everything `canalsim linearize` prints: the system, its response on the grid (validated
 // against the Nyquist frequency), static gain, poles and delay.
 FrequencyResponse linearize(const scenarios::Scenario& scenario, const scenarios::ExperimentSpec& experiment,

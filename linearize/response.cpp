@@ -201,17 +201,22 @@ std::vector<Complex> dominant_poles(const StateSpace& sys, int count) {
   return kept;
 }
 
-double delay_from_phase(const std::vector<double>& omega, const std::vector<Complex>& g) {
-  if (omega.size() < 3) return 0.0;
-  // Unwrapped phase.
+std::vector<double> unwrapped_phase_degrees(const std::vector<Complex>& g) {
   std::vector<double> phase(g.size());
   for (std::size_t k = 0; k < g.size(); ++k) {
-    phase[k] = std::arg(g[k]);
+    phase[k] = std::arg(g[k]) * 180.0 / M_PI;
     if (k > 0) {
-      while (phase[k] - phase[k - 1] > M_PI) phase[k] -= 2.0 * M_PI;
-      while (phase[k] - phase[k - 1] < -M_PI) phase[k] += 2.0 * M_PI;
+      while (phase[k] - phase[k - 1] > 180.0) phase[k] -= 360.0;
+      while (phase[k] - phase[k - 1] < -180.0) phase[k] += 360.0;
     }
   }
+  return phase;
+}
+
+double delay_from_phase(const std::vector<double>& omega, const std::vector<Complex>& g) {
+  if (omega.size() < 3) return 0.0;
+  std::vector<double> phase = unwrapped_phase_degrees(g);
+  for (double& p : phase) p *= M_PI / 180.0;
   // Least-squares slope over the upper half of the grid in log ω.
   const double middle = std::sqrt(omega.front() * omega.back());
   double sw = 0, sp = 0, sww = 0, swp = 0, count = 0;

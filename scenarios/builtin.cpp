@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "core/files.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario_toml.hpp"
 
@@ -32,6 +33,14 @@ Scenario load_scenario_or_builtin(const std::string& name_or_path) {
     throw InputError(name_or_path + ": no such scenario file (built-in scenarios: " + names + ")");
   }
   return load_scenario(name_or_path);
+}
+
+std::string scenario_toml_text(const std::string& name_or_path) {
+  for (const auto& b : builtin_scenarios()) {
+    if (b.name == name_or_path) return b.toml;
+  }
+  if (!std::filesystem::exists(name_or_path)) load_scenario_or_builtin(name_or_path);  // throws, listing the built-ins
+  return read_text_file(name_or_path, "scenario file");
 }
 
 }  // namespace canalsim::scenarios

@@ -22,4 +22,8 @@ Scenario builtin_scenario(const std::string& name);
 // A built-in name or a path to a TOML file.
 Scenario load_scenario_or_builtin(const std::string& name_or_path);
 
+// The TOML text load_scenario_or_builtin reads: the built-in's (built-in names first), or the
+// file's. Throws InputError as load_scenario_or_builtin does.
+std::string scenario_toml_text(const std::string& name_or_path);
+
 }  // namespace canalsim::scenarios

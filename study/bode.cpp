@@ -32,19 +32,6 @@ double rms_relative(const std::vector<Complex>& model, const std::vector<Complex
 
 std::string percent(double fraction) { return format_fixed(100.0 * fraction, 1) + " %"; }
 
-// Phase [deg] unwrapped along the grid.
-std::vector<double> unwrapped_degrees(const std::vector<Complex>& g) {
-  std::vector<double> p(g.size());
-  for (std::size_t k = 0; k < g.size(); ++k) {
-    p[k] = std::arg(g[k]) * 180.0 / M_PI;
-    if (k > 0) {
-      while (p[k] - p[k - 1] > 180.0) p[k] -= 360.0;
-      while (p[k] - p[k - 1] < -180.0) p[k] += 360.0;
-    }
-  }
-  return p;
-}
-
 // One SVG panel: curves y(log ω) scaled into a 640 x 220 box with the band's ends on the axis.
 std::string svg_panel(const std::vector<double>& omega, const std::vector<std::vector<double>>& curves,
                       const std::string& y_label) {
@@ -178,7 +165,7 @@ std::string bode_markdown(const std::vector<BodeSection>& sections) {
        << b.sentence << "\n\n| ω [rad/s] | PDE gain | LIOM gain | LFOM gain | PDE phase ° | LIOM phase ° | LFOM phase ° |\n"
        << "|---:|---:|---:|---:|---:|---:|---:|\n";
     // Phases unwrapped along the whole grid, then sampled.
-    const auto pp = unwrapped_degrees(b.pde), pi = unwrapped_degrees(b.liom), pf = unwrapped_degrees(b.lfom);
+    const auto pp = linearize::unwrapped_phase_degrees(b.pde), pi = linearize::unwrapped_phase_degrees(b.liom), pf = linearize::unwrapped_phase_degrees(b.lfom);
     for (std::size_t k = 0; k < b.omega.size(); k += std::max<std::size_t>(1, b.omega.size() / 12)) {
       md << "| " << format_g(b.omega[k], 3) << " | " << format_g(std::abs(b.pde[k]), 3) << " | "
          << format_g(std::abs(b.liom[k]), 3) << " | " << format_g(std::abs(b.lfom[k]), 3) << " | "
@@ -212,7 +199,7 @@ std::string bode_html_section(const std::vector<BodeSection>& sections, const st
          << " mm)</" << point_tag << "><p>"
          << html::escape(b.sentence) << "</p>"
          << svg_panel(b.omega, {db(b.pde), db(b.liom), db(b.lfom)}, "dB")
-         << svg_panel(b.omega, {unwrapped_degrees(b.pde), unwrapped_degrees(b.liom), unwrapped_degrees(b.lfom)}, "deg")
+         << svg_panel(b.omega, {linearize::unwrapped_phase_degrees(b.pde), linearize::unwrapped_phase_degrees(b.liom), linearize::unwrapped_phase_degrees(b.lfom)}, "deg")
          << "<p style=\"font-size:small\">ω [rad/s], " << format_g(b.band.low, 3) << " to " << format_g(b.band.high, 3)
          << "</p>";
   }

@@ -1,0 +1,85 @@
+"""calibrate and diagnose: the command line's results from the same inputs, on recordings of a
+canal that differs from the scenario (a head gate passing 6 % more than its law says)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import canalsim
+
+
+@pytest.fixture(scope="module")
+def recording_of_a_freer_gate(tmp_path_factory):
+    truth = canalsim.Scenario("lab")
+    truth["head_gate.discharge_coefficient"] = 1.06
+    df = canalsim.simulate(truth, "op3")
+    path = tmp_path_factory.mktemp("freer") / "op3.csv"
+    canalsim.write_recording(df, path)
+    return path
+
+
+def test_calibrate_equals_the_command_line_and_finds_the_coefficient(cli, tmp_path, recording_of_a_freer_gate):
+    flags = ["--params", "cd_free,cd_submerged", "--grid-refinements", "0", "--starts", "1"]
+    cli("calibrate", "--scenario", "lab", recording_of_a_freer_gate, *flags, "-o", tmp_path / "cal.toml",
+        "--json", tmp_path / "cal.json")
+    expected = json.loads((tmp_path / "cal.json").read_text())
+    result = canalsim.calibrate("lab", recording_of_a_freer_gate, params=["cd_free", "cd_submerged"],
+                                grid_refinements=0, starts=1)
+    assert result.ok, result.message
+    for row in expected["parameters"]:
+        assert result.estimates.loc[row["name"], "value"] == pytest.approx(row["value"], rel=1e-9)
+        assert result.estimates.loc[row["name"], "std"] == pytest.approx(row["std"], rel=1e-6)
+        assert row["value"] == pytest.approx(1.06, abs=0.01)  # the truth, up to the sensors' 0.05 mm steps
+    value = result.estimates.loc["cd_free", "value"]
+    # The calibrated scenario carries the estimate, as the file the command line wrote does.
+    assert result.scenario["head_gate.discharge_coefficient"] == pytest.approx(value, rel=1e-8)
+    written = canalsim.Scenario(tmp_path / "cal.toml")
+    assert written["head_gate.discharge_coefficient"] == pytest.approx(value, rel=1e-8)
+    assert "cd_free" in result.summary
+
+
+def test_diagnose_equals_the_command_line(cli, tmp_path, recording_of_a_freer_gate):
+    candidates = "discharge_coefficient,friction"
+    cli("diagnose", "--scenario", "lab", recording_of_a_freer_gate, "--candidates", candidates,
+        "--json", tmp_path / "d.json")
+    expected = json.loads((tmp_path / "d.json").read_text())
+    result = canalsim.diagnose("lab", recording_of_a_freer_gate, candidates=candidates.split(","))
+    assert result.ok
+    assert result.verdict == expected["verdict"]
+    assert [e["name"] for e in result.json["effects"]] == [e["name"] for e in expected["effects"]]
+    for ours, theirs in zip(result.json["effects"], expected["effects"]):
+        assert json.dumps(ours.get("parameter")) == json.dumps(theirs.get("parameter"))
+    assert result.json["nominal_rms_mm"] == expected["nominal_rms_mm"]
+
+
+def test_progress_reaches_the_callable_and_its_exception_stops_the_work():
+    reports = []
+    canalsim.simulate("lab", "op1", progress=lambda fraction, message: reports.append(fraction))
+    assert len(reports) > 10
+    assert all(0.0 <= f <= 1.0 for f in reports) and reports == sorted(reports)
+
+    class Enough(Exception):
+        pass
+
+    def stop_at_half(fraction, message):
+        if fraction > 0.5:
+            raise Enough(message)
+
+    with pytest.raises(Enough):
+        canalsim.simulate("lab", "op1", progress=stop_at_half)
+
+
+def test_ctrl_c_stops_a_long_call_with_keyboard_interrupt():
+    import os
+    import signal
+
+    def press_ctrl_c(fraction, message):
+        if fraction > 0.2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        canalsim.simulate("lab", "op1", progress=press_ctrl_c)
+    # Python's own handler is back: a later call runs to the end.
+    assert len(canalsim.simulate("lab", "op1")) > 1000
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
