@@ -29,6 +29,7 @@
 #include "linearize/linearize.hpp"
 #include "python/interrupt.hpp"
 #include "reduced_models/data.hpp"
+#include "reduced_models/frequency.hpp"
 #include "reduced_models/identification.hpp"
 #include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
@@ -250,6 +251,29 @@ reduced::FitOptions fit_options(const std::string& criterion, double quantum_mm,
   return options;
 }
 
+double mean_of(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
+}
+
+// G(iω) of a reduced model about an operating point, mm/mm (reduced_models/frequency.hpp).
+py::array_t<std::complex<double>> model_frequency_response(const std::string& model,
+                                                           const std::map<std::string, double>& parameters,
+                                                           const std::vector<double>& omega, double u0_mm,
+                                                           double y0_mm, double y_up_mm, double head_ref_mm,
+                                                           double head_ref_sub_mm) {
+  reduced::Model m;
+  m.kind = reduced::require_model_kind(model, "model");
+  for (const auto& [name, value] : parameters) reduced::set_parameter(m.p, name, value);
+  m.p.head_ref_mm = head_ref_mm;
+  m.p.head_ref_sub_mm = head_ref_sub_mm;
+  if (const Status status = reduced::validate(m); !status) throw InputError(status.message());
+  std::vector<std::complex<double>> g;
+  for (double w : omega) g.push_back(reduced::frequency_response(m, {u0_mm, y0_mm, y_up_mm}, w));
+  return py::array_t<std::complex<double>>(static_cast<py::ssize_t>(g.size()), g.data());
+}
+
 py::dict fit_dict(const reduced::FitResult& r, const std::vector<reduced::ExperimentData>& data,
                   const std::vector<std::size_t>& which) {
   py::dict parameters;
@@ -262,11 +286,14 @@ py::dict fit_dict(const reduced::FitResult& r, const std::vector<reduced::Experi
     responses.append(py::dict(py::arg("recording") = r.sources[i], py::arg("t_s") = to_array(d.t_s),
                               py::arg("y_dwe_mm") = to_array(d.y_dwe_mm),
                               py::arg("model_y_dwe_mm") = to_array(r.response[i]), py::arg("u0_mm") = d.u0_mm,
-                              py::arg("y0_mm") = r.y0_mm.empty() ? d.y0_mm : r.y0_mm[i]));
+                              py::arg("y0_mm") = r.y0_mm.empty() ? d.y0_mm : r.y0_mm[i],
+                              py::arg("y_up_mm") = mean_of(d.y_up_mm)));
   }
   py::dict out;
   out["model"] = reduced::model_name(r.model.kind);
   out["parameters"] = parameters;
+  out["head_ref_mm"] = r.model.p.head_ref_mm;  // H of the nonlinear models' head terms
+  out["head_ref_sub_mm"] = r.model.p.head_ref_sub_mm;
   out["nrmse"] = r.nrmse;
   out["iae"] = r.iae;
   out["iae_total"] = r.iae_total;
@@ -432,6 +459,7 @@ PYBIND11_MODULE(_canalsim, m) {
   m.def("simulate", &simulate);
   m.def("linearize", &linearize_pool);
   m.def("fit", &fit);
+  m.def("model_frequency_response", &model_frequency_response);
   m.def("calibrate", &calibrate);
   m.def("diagnose", &diagnose);
 }

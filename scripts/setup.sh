@@ -5,13 +5,16 @@
 CANALSIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 # Build tools and libraries, all from Debian 12 (bookworm). clang-14 and libclang-rt-14-dev
-# (libFuzzer) build the fuzz targets only (fuzz/, scripts/fuzz); everything else uses g++.
+# (libFuzzer) build the fuzz targets only (fuzz/, scripts/fuzz); everything else uses g++. The
+# Python package (python/) needs the interpreter's headers and pybind11; numpy, pandas, pytest
+# and matplotlib (the worked example's plots) come from Debian too, for Debian's /usr/bin/python3.
 CANALSIM_PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsundials-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev libceres-dev
   clang-14 libclang-rt-14-dev
+  python3-dev pybind11-dev python3-numpy python3-pandas python3-pytest python3-matplotlib
 )
 
 canalsim_log() { printf '==> %s\n' "$*" >&2; }
@@ -42,4 +45,33 @@ canalsim_build() {
   canalsim_log "building $dir (log: $dir.build.log)"
   cmake --build "$dir" -j "$(nproc)" >"$dir.build.log" 2>&1 \
     || { tail -n 60 "$dir.build.log" >&2; return 1; }
+}
+
+# canalsim_install BUILD_DIR: installs the program and the Python package under /usr/local
+# (`cmake --install`; as root, or with sudo). Debian's python3 finds the package there. When the
+# python3 first on PATH is another interpreter of the same version (a pyenv one, say), which does
+# not look in Debian's directories, a canalsim-debian.pth in its site-packages adds them (after
+# its own), so that `python3 -c "import canalsim"` works with whichever python3 the shell finds.
+canalsim_install() {
+  local dir="$1"
+  local sudo=()
+  [ "$(id -u)" -ne 0 ] && sudo=(sudo)
+  canalsim_log "installing canalsim and the Python package under /usr/local"
+  "${sudo[@]}" cmake --install "$dir" --prefix /usr/local >"$dir.install.log" 2>&1 \
+    || { cat "$dir.install.log" >&2; return 1; }
+  local python
+  python="$(command -v python3 || true)"
+  [ -z "$python" ] || [ "$python" = /usr/bin/python3 ] && return 0
+  "$python" -c "import canalsim" >/dev/null 2>&1 && return 0
+  local debian_version other_version site
+  debian_version="$(/usr/bin/python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
+  other_version="$("$python" -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || true)"
+  if [ "$debian_version" != "$other_version" ]; then
+    canalsim_log "note: $python is Python $other_version; the package is for Debian's /usr/bin/python3 ($debian_version)"
+    return 0
+  fi
+  site="$("$python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+  printf '%s\n' "/usr/local/lib/python$debian_version/dist-packages" /usr/lib/python3/dist-packages \
+    | "${sudo[@]}" tee "$site/canalsim-debian.pth" >/dev/null
+  canalsim_log "$python: added Debian's package directories to it ($site/canalsim-debian.pth)"
 }

@@ -87,6 +87,15 @@ class Scenario:
 ScenarioLike = Union[str, os.PathLike, Scenario]
 
 
+def _scenario_text(s: ScenarioLike):
+    """(text, source) of a scenario; a name or path is read, not parsed twice."""
+    if isinstance(s, Scenario):
+        return s.text, s.source
+    if isinstance(s, (str, os.PathLike)):
+        return _canalsim.scenario_text(os.fspath(s)), os.fspath(s)
+    raise TypeError(f"scenario: expected a built-in name, a path or a Scenario, got {type(s).__name__}")
+
+
 def _scenario(s: ScenarioLike) -> Scenario:
     if isinstance(s, Scenario):
         return s
@@ -103,8 +112,8 @@ def simulate(scenario: ScenarioLike, experiment: str, *, allow_long: bool = Fals
     (scenario, experiment, sensors, operating point, ...) in ``df.attrs``. A run past the cost
     ceilings (docs/scenarios.md, "Run cost") is refused unless ``allow_long``.
     """
-    s = _scenario(scenario)
-    result = _canalsim.simulate(s.text, s.source, experiment, allow_long, progress)
+    text, source = _scenario_text(scenario)
+    result = _canalsim.simulate(text, source, experiment, allow_long, progress)
     for warning in result["warnings"]:
         import warnings
         warnings.warn(warning, RuntimeWarning, stacklevel=2)
@@ -142,6 +151,17 @@ class FitResult:
     converged: bool
     message: str
     recordings: List[str] = field(default_factory=list)
+    operating_point: Dict[str, float] = field(default_factory=dict)
+
+    def frequency_response(self, omega) -> np.ndarray:
+        """G(iω) of the fitted model about its (first) recording's operating point, in mm of
+        y_dwe per mm of command, at the angular frequencies `omega` [rad/s]; the nonlinear
+        models linearised there (reduced_models/frequency.hpp). Hold it against
+        :func:`linearize` (in m/m, the same ratio)."""
+        p = self.operating_point
+        return _canalsim.model_frequency_response(self.model, self.parameters, np.asarray(omega, dtype=float).tolist(),
+                                                  p["u0_mm"], p["y0_mm"], p["y_up_mm"], p["head_ref_mm"],
+                                                  p["head_ref_sub_mm"])
 
 
 def _fit_result(d: dict) -> FitResult:
@@ -154,7 +174,10 @@ def _fit_result(d: dict) -> FitResult:
     return FitResult(model=d["model"], parameters=dict(d["parameters"]), std=dict(d.get("std", {})),
                      correlation=correlation, nrmse=list(d["nrmse"]), iae=list(d["iae"]),
                      response=pd.concat(frames, ignore_index=True), converged=d["converged"],
-                     message=d["message"], recordings=[r["recording"] for r in d["responses"]])
+                     message=d["message"], recordings=[r["recording"] for r in d["responses"]],
+                     operating_point={"u0_mm": d["responses"][0]["u0_mm"], "y0_mm": d["responses"][0]["y0_mm"],
+                                      "y_up_mm": d["responses"][0]["y_up_mm"], "head_ref_mm": d["head_ref_mm"],
+                                      "head_ref_sub_mm": d["head_ref_sub_mm"]})
 
 
 def fit(model: str, recordings: Recordings, *, nominal: bool = False, criterion: str = "ls",

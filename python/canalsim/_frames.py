@@ -12,7 +12,7 @@ import pandas as pd
 
 Recording = Union[str, os.PathLike, pd.DataFrame]
 
-_REGIME_WORDS = {0: "free", 1: "submerged"}
+_REGIME_WORDS = ["free", "submerged"]  # by RegimeCode (core/recording.hpp)
 _REGIME_CODES = {"free": 0.0, "submerged": 1.0}
 
 
@@ -21,10 +21,10 @@ def frame(recording: dict) -> pd.DataFrame:
     columns = {}
     for name, values in zip(recording["names"], recording["columns"]):
         if name == "regime":
-            columns[name] = pd.Series(np.asarray(values)).round().astype(int).map(_REGIME_WORDS)
+            columns[name] = pd.Categorical.from_codes(np.rint(values).astype(np.int8), categories=_REGIME_WORDS)
         else:
             columns[name] = np.asarray(values)
-    df = pd.DataFrame(columns)
+    df = pd.DataFrame(columns, copy=False)
     df.attrs = dict(recording["metadata"])
     df.attrs["source"] = recording["source"]
     return df
@@ -46,7 +46,7 @@ def recording(data: Recording, label: str) -> dict:
             if unknown:
                 from . import InputError
                 raise InputError(f"{label}: column regime holds {sorted(unknown)[0]!r}, expected free or submerged")
-            values = values.map(_REGIME_CODES)
+            values = values.astype(object).map(_REGIME_CODES)
         names.append(str(name))
         columns.append(np.asarray(values, dtype=float))
     metadata = [(str(k), str(v)) for k, v in data.attrs.items() if k != "source"]
