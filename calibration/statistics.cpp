@@ -3,15 +3,13 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <numeric>
 
 #include "core/format.hpp"
+#include "core/statistics.hpp"
 
 namespace canalsim::calibration {
 namespace {
 
-constexpr double kNullRatio = 1e-9;       // eigenvalue / largest below which a direction is undetermined
 constexpr double kHighCorrelation = 0.95;
 constexpr double kHighRelativeStd = 0.5;
 
@@ -45,74 +43,20 @@ std::string combination(const std::vector<Parameter>& parameters, const std::vec
   return out;
 }
 
-}  // namespace
-
-double autocorrelation_inflation(const std::vector<std::vector<double>>& series) {
-  double n = 0.0, n_eff = 0.0;
-  for (const auto& e : series) {
-    if (e.size() < 3) continue;
-    const std::size_t m = e.size();
-    const double mean = std::accumulate(e.begin(), e.end(), 0.0) / static_cast<double>(m);
-    auto autocovariance = [&](std::size_t lag) {
-      double c = 0.0;
-      for (std::size_t k = 0; k + lag < m; ++k) c += (e[k] - mean) * (e[k + lag] - mean);
-      return c / static_cast<double>(m);
-    };
-    const double c0 = autocovariance(0);
-    // Integrated autocorrelation time τ = 1 + 2 Σ ρ_k over the initial positive sequence (sums
-    // of adjacent pairs, Geyer 1992), at most a quarter of the series.
-    double tau = 1.0;
-    if (c0 > 0.0) {
-      for (std::size_t lag = 1; lag + 1 < m / 4; lag += 2) {
-        const double pair = (autocovariance(lag) + autocovariance(lag + 1)) / c0;
-        if (pair <= 0.0) break;
-        tau += 2.0 * pair;
-      }
-    }
-    n += static_cast<double>(m);
-    n_eff += std::max(1.0, static_cast<double>(m) / tau);
-  }
-  return n_eff > 0.0 ? std::max(1.0, n / n_eff) : 1.0;
-}
-
-ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameters, const std::vector<double>& z,
-                                         const std::vector<double>& jacobian, const std::vector<double>& residuals,
-                                         const std::vector<std::vector<double>>& series) {
-  const auto p = static_cast<Eigen::Index>(parameters.size());
-  const auto n = static_cast<Eigen::Index>(residuals.size());
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobian.data(), n, p);
-  ParameterStatistics out;
-  out.inflation = autocorrelation_inflation(series);
-  const double sse = std::inner_product(residuals.begin(), residuals.end(), residuals.begin(), 0.0);
-  const double s2 = sse / static_cast<double>(std::max<Eigen::Index>(n - p, 1));
-
-  // Column-scaled normal matrix (unit diagonal) and its eigen-decomposition.
-  const Eigen::MatrixXd F = J.transpose() * J;
-  Eigen::VectorXd scale(p);
-  for (Eigen::Index j = 0; j < p; ++j) scale(j) = F(j, j) > 0.0 ? 1.0 / std::sqrt(F(j, j)) : 0.0;
-  const Eigen::MatrixXd Fs = scale.asDiagonal() * F * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Fs);
-  const Eigen::VectorXd lambda = eig.eigenvalues();
-  const Eigen::MatrixXd V = eig.eigenvectors();
-  const double largest = lambda.size() ? lambda.maxCoeff() : 0.0;
-  std::vector<bool> undetermined(parameters.size(), false);
-  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
-  for (Eigen::Index k = 0; k < p; ++k) {
-    if (lambda(k) > kNullRatio * largest && largest > 0.0) {
-      inverse += V.col(k) * V.col(k).transpose() / lambda(k);
-      continue;
-    }
-    // A null direction: the parameters it moves are not determined; name them with the
-    // combination orthogonal to it (what the data fix), in unscaled search coordinates.
+// The null directions of the covariance (exact trade-offs): the parameters each moves are not
+// determined; named with the combination orthogonal to it (what the data fix), in unscaled search
+// coordinates.
+void name_null_directions(const std::vector<Parameter>& parameters, const LeastSquaresCovariance& c,
+                          ParameterStatistics& out) {
+  for (const auto& direction : c.null_directions) {
     ParameterStatistics::Unidentified u;
     std::vector<std::size_t> which;
     std::vector<double> null;
-    for (Eigen::Index j = 0; j < p; ++j) {
-      if (std::abs(V(j, k)) < 0.1) continue;
-      undetermined[static_cast<std::size_t>(j)] = true;
-      which.push_back(static_cast<std::size_t>(j));
-      null.push_back(scale(j) > 0.0 ? V(j, k) * scale(j) : V(j, k));
-      u.parameters.push_back(parameters[static_cast<std::size_t>(j)].name);
+    for (std::size_t j = 0; j < parameters.size(); ++j) {
+      if (std::abs(direction[j]) < 0.1) continue;
+      which.push_back(j);
+      null.push_back(c.column_scale[j] > 0.0 ? direction[j] * c.column_scale[j] : direction[j]);
+      u.parameters.push_back(parameters[j].name);
     }
     u.reason = "exact trade-off: the recordings do not depend on them separately";
     if (which.size() == 2) {
@@ -124,73 +68,40 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
     }
     out.unidentified.push_back(std::move(u));
   }
-  // Covariance: the batch-means sandwich (a HAC estimator, e.g. Newey & West 1987; Flegal & Jones
-  // 2010 for batch means) B M B with B = (JᵀJ)⁺ and M = Σ_b g_b g_bᵀ, g_b = J_bᵀ r_b summed over
-  // blocks of L consecutive samples of one series, L = 2 τ (the integrated autocorrelation time).
-  // A residual left by a model that cannot represent the data (another grid, another law) is
-  // smooth: its blocks push the parameters the same way, and M grows accordingly; white noise
-  // gives back s² B. Scaled by n_b / (n_b − p) for the degrees of freedom.
-  const Eigen::MatrixXd B = scale.asDiagonal() * inverse * scale.asDiagonal();
-  std::size_t shortest = residuals.size();
-  for (const auto& e : series) shortest = std::min(shortest, e.size());
-  const std::size_t block = std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(2.0 * out.inflation)), 1,
-                                                    std::max<std::size_t>(shortest / 4, 1));
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(p, p);
-  std::size_t row = 0, blocks = 0;
-  for (const auto& e : series) {
-    for (std::size_t start = 0; start < e.size(); start += block) {
-      Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
-      for (std::size_t k = start; k < std::min(start + block, e.size()); ++k) {
-        g += J.row(static_cast<Eigen::Index>(row + k)).transpose() * residuals[row + k];
-      }
-      M += g * g.transpose();
-      ++blocks;
-    }
-    row += e.size();
-  }
-  const double dof = static_cast<double>(blocks) / static_cast<double>(std::max<std::size_t>(blocks, parameters.size() + 1) - parameters.size());
-  Eigen::MatrixXd Cz = row == residuals.size() ? Eigen::MatrixXd(B * M * B * dof) : Eigen::MatrixXd(s2 * out.inflation * B);
-  // Never below the white-noise covariance: the sandwich can be small by chance on few blocks.
-  double ratio = 0.0;
-  int counted = 0;
-  for (Eigen::Index j = 0; j < p; ++j) {
-    if (!(B(j, j) > 0.0)) continue;
-    ratio += Cz(j, j) / (s2 * B(j, j));
-    ++counted;
-  }
-  ratio = counted ? ratio / counted : 1.0;
-  if (ratio < 1.0) Cz = s2 * B;
-  out.inflation = std::max(ratio, 1.0);
+}
 
-  const std::size_t np = parameters.size();
-  out.std.assign(np, 0.0);
-  out.sensitivity.assign(np, 0.0);
-  out.correlation.assign(np, std::vector<double>(np, std::numeric_limits<double>::quiet_NaN()));
-  for (std::size_t j = 0; j < np; ++j) {
+// Standard deviations in parameter units by the delta method (log: σ_v = v σ_z), and composite
+// scaled sensitivities sqrt(Σ_i (J_ij s_j)² / N).
+void deviations_and_sensitivities(const std::vector<Parameter>& parameters, const std::vector<double>& z,
+                                  const std::vector<double>& jacobian, std::size_t rows,
+                                  const LeastSquaresCovariance& c, ParameterStatistics& out) {
+  const auto p = static_cast<Eigen::Index>(parameters.size());
+  const auto n = static_cast<Eigen::Index>(rows);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobian.data(), n, p);
+  const std::vector<double> sz = standard_deviations(c);
+  out.std.assign(parameters.size(), 0.0);
+  out.sensitivity.assign(parameters.size(), 0.0);
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
     const auto jj = static_cast<Eigen::Index>(j);
     const double value = parameters[j].from_search(z[j]);
-    const double sz = std::sqrt(std::max(Cz(jj, jj), 0.0));
-    out.std[j] = undetermined[j] ? std::numeric_limits<double>::infinity()
-                                 : (parameters[j].transform == Transform::log ? value * sz : sz);
-    const double s = parameters[j].transform == Transform::log ? 1.0 : magnitude(parameters[j], value);
+    const bool log = parameters[j].transform == Transform::log;
+    out.std[j] = c.undetermined[j] || !log ? sz[j] : value * sz[j];
+    const double s = log ? 1.0 : magnitude(parameters[j], value);
     out.sensitivity[j] = std::sqrt(J.col(jj).squaredNorm() / static_cast<double>(std::max<Eigen::Index>(n, 1))) * s;
   }
-  for (std::size_t a = 0; a < np; ++a) {
-    for (std::size_t b = 0; b < np; ++b) {
-      if (undetermined[a] || undetermined[b]) continue;
-      const auto ia = static_cast<Eigen::Index>(a), ib = static_cast<Eigen::Index>(b);
-      const double d = std::sqrt(Cz(ia, ia) * Cz(ib, ib));
-      out.correlation[a][b] = a == b ? 1.0 : (d > 0.0 ? Cz(ia, ib) / d : 0.0);
-    }
-  }
-  // Strong correlations between determined parameters: the pair, and u_a - sign(ρ) u_b with
-  // u = z / σ_z, the combination with the small variance.
+}
+
+// Strong correlations between determined parameters: the pair, and u_a - sign(ρ) u_b with
+// u = z / σ_z, the combination with the small variance.
+void name_strong_correlations(const std::vector<Parameter>& parameters, const LeastSquaresCovariance& c,
+                              ParameterStatistics& out) {
+  const std::size_t np = parameters.size();
   for (std::size_t a = 0; a < np; ++a) {
     for (std::size_t b = a + 1; b < np; ++b) {
       const double rho = out.correlation[a][b];
       if (!(std::abs(rho) > kHighCorrelation)) continue;
-      const double sa = std::sqrt(Cz(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(a)));
-      const double sb = std::sqrt(Cz(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(b)));
+      const double sa = std::sqrt(c(a, a));
+      const double sb = std::sqrt(c(b, b));
       ParameterStatistics::Unidentified u;
       u.parameters = {parameters[a].name, parameters[b].name};
       u.reason = "|correlation| = " + format_fixed(std::abs(rho), 3);
@@ -198,8 +109,13 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
       out.unidentified.push_back(std::move(u));
     }
   }
-  for (std::size_t j = 0; j < np; ++j) {
-    if (undetermined[j]) continue;
+}
+
+// Determined parameters whose relative std exceeds kHighRelativeStd.
+void name_weak_parameters(const std::vector<Parameter>& parameters, const std::vector<double>& z,
+                          const LeastSquaresCovariance& c, ParameterStatistics& out) {
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    if (c.undetermined[j]) continue;
     const double relative = out.std[j] / magnitude(parameters[j], parameters[j].from_search(z[j]));
     if (relative > kHighRelativeStd) {
       ParameterStatistics::Unidentified u;
@@ -209,6 +125,22 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
       out.unidentified.push_back(std::move(u));
     }
   }
+}
+
+}  // namespace
+
+ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameters, const std::vector<double>& z,
+                                         const std::vector<double>& jacobian, const std::vector<double>& residuals,
+                                         const std::vector<std::vector<double>>& series) {
+  // The covariance in the search coordinates: the batch-means sandwich of core/statistics.hpp.
+  const LeastSquaresCovariance c = least_squares_covariance(jacobian, parameters.size(), residuals, series);
+  ParameterStatistics out;
+  out.inflation = c.inflation;
+  name_null_directions(parameters, c, out);
+  deviations_and_sensitivities(parameters, z, jacobian, residuals.size(), c, out);
+  out.correlation = correlations(c);
+  name_strong_correlations(parameters, c, out);
+  name_weak_parameters(parameters, z, c, out);
   return out;
 }
 

@@ -22,24 +22,17 @@ struct ParameterStatistics {
   std::vector<Unidentified> unidentified;
 };
 
-// N / N_eff of residual series: each series' effective size n / τ with τ its integrated
-// autocorrelation time (Geyer's initial positive sequence), at least 1. A residual left by a model
-// that cannot represent the data is smooth and long-correlated; τ then inflates the covariance
-// accordingly, where a lag-one (AR(1)) correction would not.
-double autocorrelation_inflation(const std::vector<std::vector<double>>& series);
-
 // `jacobian`: N × p row-major, of the weighted residuals in the search coordinates `z`;
 // `residuals`: the weighted residuals at the optimum; `series`: the unweighted residual series
-// (for the autocorrelation correction).
-//   C_z = B M B,  B = (JᵀJ)⁺,  M = Σ_b g_b g_bᵀ,  g_b = J_bᵀ r_b
-// summed over blocks of 2τ consecutive samples of each series (τ: integrated autocorrelation time),
-// a batch-means sandwich that is s² B for white residuals and grows with a smooth, model-form
-// residual; never below s² B (s² = rᵀr / (N − p)). `inflation` is its mean ratio to s² B.
-// the pseudo-inverse taken on the column-scaled JᵀJ; directions whose eigenvalue is below 1e-9 of
-// the largest are not determined (exact trade-offs): their parameters get std = +inf and are named
-// with the combination that is determined. Standard deviations in parameter units by the delta
-// method (log: σ_v = v σ_z). Pairs with |correlation| > 0.95 and parameters with a relative std
-// above 50 % are named too, relative to |v_j| for log parameters and to max(|v_j|, 10 steps) for
+// (for the autocorrelation correction). The covariance C_z in the search coordinates is
+// core/statistics.hpp's least_squares_covariance: the batch-means sandwich B M B over blocks of
+// 2τ samples (τ: integrated autocorrelation time, Geyer 1992), s² B for white residuals and
+// larger for a smooth, model-form residual, never below s² B; `inflation` is its mean ratio to
+// s² B. Directions of the column-scaled JᵀJ whose eigenvalue is below 1e-9 of the largest are not
+// determined (exact trade-offs): their parameters get std = +inf and are named with the
+// combination that is determined. Standard deviations in parameter units by the delta method
+// (log: σ_v = v σ_z). Pairs with |correlation| > 0.95 and parameters with a relative std above
+// 50 % are named too, relative to |v_j| for log parameters and to max(|v_j|, 10 steps) for
 // linear ones (offsets sit near zero). Composite scaled sensitivity: sqrt(Σ_i (J_ij s_j)² / N),
 // s_j = 1 for log parameters (a unit of log), max(|v_j|, 10 steps) for linear ones.
 ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameters, const std::vector<double>& z,

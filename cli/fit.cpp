@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -21,6 +22,8 @@
 #include "cli/checks.hpp"
 #include "cli/recording_format.hpp"
 #include "core/format.hpp"
+#include "core/json.hpp"
+#include "core/text.hpp"
 #include "cli/finite_figures.hpp"
 #include "cli/commands.hpp"
 #include "cli/freq_check.hpp"
@@ -71,6 +74,22 @@ nlohmann::json parameters_json(const Model& m) {
   return p;
 }
 
+// How sure the fit is: "std" per parameter (the units of "parameters"; null where not
+// determined), "correlation" {names, matrix} (null for a parameter held fixed or not determined)
+// and the autocorrelation "inflation" of the variances.
+void add_statistics_json(nlohmann::json& j, const FitResult& r) {
+  nlohmann::json std = nlohmann::json::object(), matrix = nlohmann::json::array();
+  for (std::size_t a = 0; a < r.parameter_names.size(); ++a) {
+    std[r.parameter_names[a]] = json_number(r.std[a]);
+    nlohmann::json row = nlohmann::json::array();
+    for (double rho : r.correlation[a]) row.push_back(json_number(rho));
+    matrix.push_back(std::move(row));
+  }
+  j["std"] = std;
+  j["correlation"] = {{"names", r.parameter_names}, {"matrix", matrix}};
+  j["inflation"] = json_number(r.inflation);
+}
+
 nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& data,
                         const std::vector<std::size_t>& which) {
   nlohmann::json j;
@@ -94,6 +113,7 @@ nlohmann::json fit_json(const FitResult& r, const std::vector<ExperimentData>& d
                    {"model_y_dwe_mm", r.response[i]}});
   }
   j["recordings"] = per;
+  add_statistics_json(j, r);
   return j;
 }
 
@@ -256,28 +276,45 @@ struct TableRow {
   double gain_factor = 1.0;
 };
 
+// A parameter as "value ± std" (core/format.hpp's format_estimate; "(± n/a)" where the std is
+// 0 or not finite: held fixed, or not determined by the recording).
+std::string estimate_cell(const FitResult& r, std::size_t j, double factor) {
+  const double value = get_parameter(r.model.p, r.parameter_names[j]) * factor;
+  return j < r.std.size() ? format_estimate(value, r.std[j] * factor) : format_g(value, 4);
+}
+
 void print_table(const std::string& title, const std::vector<std::string>& names,
                  const std::vector<TableRow>& rows) {
+  // Cells first: the columns are as wide as their widest estimate.
+  std::vector<std::vector<std::string>> cells;
+  std::vector<std::size_t> widths;
+  for (const auto& n : names) widths.push_back(std::max<std::size_t>(n.size(), 10));
+  for (const auto& row : rows) {
+    cells.emplace_back();
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      cells.back().push_back(estimate_cell(*row.fit, j, names[j] == "K" ? row.gain_factor : 1.0));
+      widths[j] = std::max(widths[j], text_width(cells.back().back()));
+    }
+  }
   std::cout << title << "\n";
   std::size_t width = std::string("recording").size();
   for (const auto& row : rows) width = std::max(width, row.label.size());
-  char buffer[64];
   std::cout << "  " << "recording" << std::string(width - 9, ' ');
-  for (const auto& n : names) {
-    std::snprintf(buffer, sizeof buffer, " %10s", n.c_str());
-    std::cout << buffer;
-  }
-  std::cout << "  " << std::string(10 - 3, ' ') << "IAE" << "     Nrmse\n";
-  for (const auto& [label, r, gain_factor] : rows) {
+  for (std::size_t j = 0; j < names.size(); ++j) std::cout << "  " << std::string(widths[j] - names[j].size(), ' ') << names[j];
+  std::cout << "  " << std::string(10 - 3, ' ') << "IAE" << "     Nrmse  autocorr\n";
+  char buffer[64];
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& [label, r, gain_factor] = rows[i];
     std::cout << "  " << label << std::string(width - label.size(), ' ');
-    for (const auto& n : names) {
-      const double value = get_parameter(r->model.p, n) * (n == "K" ? gain_factor : 1.0);
-      std::snprintf(buffer, sizeof buffer, " %10.4g", value);
-      std::cout << buffer;
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      std::cout << "  " << std::string(widths[j] - text_width(cells[i][j]), ' ') << cells[i][j];
     }
     std::snprintf(buffer, sizeof buffer, "  %10.4g  %7.2f%%", r->iae.front(), r->nrmse.front());
-    std::cout << buffer << (r->converged ? "" : "  (" + r->message + ")") << "\n";
+    std::cout << buffer << "  " << std::setw(8) << format_figure(r->inflation, 1, "x")
+              << (r->converged ? "" : "  (" + r->message + ")") << "\n";
   }
+  std::cout << "  (± one standard deviation, autocorr the factor the residuals' autocorrelation widened the "
+               "variances by; n/a: held fixed or not determined)\n";
 }
 
 // Δp (eq. 22) is relative to the nominal value: undefined when that is 0 (γ = 0 in particular), so
@@ -405,6 +442,9 @@ std::map<std::string, double> print_fits(const FitArguments& args, ModelKind kin
     per[j].model = f.nominal->model;
     per[j].iae = {f.nominal->iae[j]};
     per[j].nrmse = {f.nominal->nrmse[j]};
+    per[j].parameter_names = f.nominal->parameter_names;
+    per[j].std = f.nominal->std;
+    per[j].inflation = f.nominal->inflation;
     per[j].converged = f.nominal->converged;
     per[j].message = f.nominal->message;
     nominal_rows.push_back({"nominal @ " + labels[j], &per[j], declared_gain_factor(data[j])});

@@ -1,4 +1,4 @@
-// Small text helpers of the file readers.
+// Small text helpers of the file readers and the tables.
 #pragma once
 
 #include <string>
@@ -11,6 +11,14 @@ inline std::string trim(const std::string& s) {
   if (first == std::string::npos) return "";
   const auto last = s.find_last_not_of(" \t\r\n");
   return s.substr(first, last - first + 1);
+}
+
+// The characters of UTF-8 text (bytes that do not continue a character): the columns it takes
+// in a table, where "±" and "∞" are one column each but two and three bytes.
+inline std::size_t text_width(const std::string& s) {
+  std::size_t n = 0;
+  for (const char c : s) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  return n;
 }
 
 }  // namespace canalsim

@@ -109,6 +109,13 @@ void check_data_for_fit(ModelKind kind, const std::vector<const ExperimentData*>
 // With `offsets` (one per recording), the operating points are y0 + offset.
 FitResult finish(const Model& model, const std::vector<const ExperimentData*>& data,
                  const SimulationOptions& simulation, const std::vector<double>& offsets = {});
+// Fills r.parameter_names, r.std, r.correlation and r.inflation for the fit `r` of `data`
+// (fit_statistics.cpp). `options`: the fit's options (a parameter fixed there, or with lower ==
+// upper, is not fitted); `offsets_fitted`: the least-squares criterion estimated each recording's
+// output offset (r.y0_mm), a nuisance parameter here; `bias`: the sensor's mean reading the
+// polish fitted (nullptr or a zero step: the level itself).
+void add_fit_statistics(FitResult& r, const std::vector<const ExperimentData*>& data, const FitOptions& options,
+                        bool offsets_fitted, const ReadingBias* bias);
 // Refinement from a model's parameters (delay bracket around its L), with the step scale and
 // restart count of Problem::refine.
 FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*>& data,

@@ -95,6 +95,13 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
     if (sweep.nrmse[i] > sweep.nrmse[sweep.best]) sweep.best = i;
   }
   sweep.best_fit = fits[sweep.best];
+  // The fits polished from a neighbour (IAE, no offsets) leave their statistics to the best one.
+  if (sweep.best_fit.std.empty()) {
+    FitOptions o = options;
+    o.bounds.gamma = {sweep.gamma[sweep.best], sweep.gamma[sweep.best], sweep.gamma[sweep.best], true};
+    if (kind == ModelKind::hybrid) o.bounds.gamma_sub = o.bounds.gamma;
+    detail::add_fit_statistics(sweep.best_fit, detail::pointers(data), o, false, nullptr);
+  }
   return sweep;
 }
 

@@ -209,9 +209,7 @@ class FitSession {
                            polish_bracket_s_);
       count(whole);
     }
-    // The polish profiles K out in closed form: a K held fixed keeps the IAE fit.
-    const bool least_squares = options_.criterion == Criterion::least_squares && output_linear_in_gain(kind) &&
-                               !options_.bounds.K.fixed;
+    const bool least_squares = polished_by_least_squares(kind);
     if (least_squares) stage(kind, "polishing by least squares");
     FitResult r = least_squares ? polish_least_squares(kind, model, converged, message)
                                 : result(model, converged, message);
@@ -231,7 +229,19 @@ class FitSession {
   int evaluations() const { return evaluations_; }
   int simulations() const { return simulations_; }
 
+  // The std, correlations and inflation of the fit `r` of `kind` (fit_statistics.cpp), with the
+  // output offsets and the sensor's mean reading that the least-squares polish fitted.
+  void add_statistics(ModelKind kind, FitResult& r) const {
+    add_fit_statistics(r, data_, options_, polished_by_least_squares(kind),
+                       reading_bias_ ? &*reading_bias_ : nullptr);
+  }
+
  private:
+  // The polish profiles K out in closed form: a K held fixed keeps the IAE fit.
+  bool polished_by_least_squares(ModelKind kind) const {
+    return options_.criterion == Criterion::least_squares && output_linear_in_gain(kind) && !options_.bounds.K.fixed;
+  }
+
   struct Searched {
     Model model;
     double cost = kInf;
@@ -336,6 +346,7 @@ class FitSession {
     return least_squares_result(kind, best, converged && polish_converged, message);
   }
 
+
   // The recordings' lattice and the σ (on a grid of 0.05–0.7 steps) whose mean reading fits
   // `model` best; no lattice (step 0) when the levels lie on none or the model quantises.
   ReadingBias best_reading_bias(ModelKind kind, const Model& model) const {
@@ -410,6 +421,7 @@ FitResult fit_impl(ModelKind kind, const std::vector<const ExperimentData*>& dat
   check_data_for_fit(kind, data, options);
   FitSession session(data, options);
   FitResult r = session.fit(kind);
+  session.add_statistics(kind, r);
   r.evaluations = session.evaluations();
   r.simulations = session.simulations();
   return r;
@@ -606,7 +618,10 @@ FitResult refit_impl(const Model& start, const std::vector<const ExperimentData*
 
 FitResult refit_from(const Model& start, const std::vector<ExperimentData>& data,
                      const FitOptions& options) {
-  return detail::refit_impl(start, detail::pointers(data), options, 1.0, -1);
+  const auto ptrs = detail::pointers(data);
+  FitResult r = detail::refit_impl(start, ptrs, options, 1.0, -1);
+  detail::add_fit_statistics(r, ptrs, options, false, nullptr);  // an IAE refinement: no offsets
+  return r;
 }
 
 Validation validate_model(const Model& model, const ExperimentData& data,

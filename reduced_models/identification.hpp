@@ -127,6 +127,26 @@ struct FitResult {
   int simulations = 0;                       // GL simulations spent (all recordings)
   bool converged = true;                     // false: an optimiser stopped on a limit/failure
   std::string message;                       // optimiser status, for reports
+  // How sure the fit is (docs/reduced-models.md, "How sure a fit is"): from the least-squares
+  // Jacobian of the output residuals (model − recording, every sample of every recording) by
+  // central differences, with the output offsets of the least-squares criterion as nuisance
+  // parameters, and the residuals' autocorrelation taken into account (core/statistics.hpp: the
+  // batch-means sandwich covariance). For the IAE criterion it is the least-squares figure at the
+  // IAE optimum (for Gaussian noise the IAE estimate scatters about sqrt(π/2) ≈ 1.25 times more).
+  // One entry per parameter of parameter_names(model.kind), in that order; empty where not
+  // computed (the fits inside a γ sweep, whose best fit has them), NaN where the model could not
+  // be simulated a step away from the fit.
+  std::vector<std::string> parameter_names;
+  // Standard deviation, parameter units (K as in model.p). 0 for a parameter held fixed (bounds
+  // lo == hi, a fixed start, the γ of a sweep): it was not fitted. +inf where the recordings do
+  // not determine it (an exact trade-off with another parameter, or no dependence at all).
+  std::vector<double> std;
+  // Correlations between the estimates; NaN in the rows and columns of fixed or undetermined
+  // parameters.
+  std::vector<std::vector<double>> correlation;
+  // The sandwich's variances over the white-noise ones (≥ 1): how much the residuals'
+  // autocorrelation widened the std; NaN where not computed.
+  double inflation = std::numeric_limits<double>::quiet_NaN();
 };
 
 // What fitting `kind` to these recordings `fits` times over takes, known before it starts: the

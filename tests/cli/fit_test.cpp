@@ -1,7 +1,7 @@
 // `canalsim fit`: an unwritable --json is refused before any recording is read or fitted; the
 // uncertainty index of a parameter whose nominal value is 0 is printed as undefined, not inf%;
 // --bounds and --start are checked against the model's parameter names; the table shows whole
-// recording names.
+// recording names; each parameter comes with its std and the fit with the correlations.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -52,6 +52,30 @@ void write_step_recording(const fs::path& file) {
   }
 }
 
+// Every fit says how sure it is: the table shows value ± std, the JSON a std per parameter, the
+// correlations by name and the autocorrelation inflation; a parameter held by its bounds has std
+// 0 and null correlations (JSON has no NaN).
+TEST(Fit, TableAndJsonGiveEachParametersStdAndTheirCorrelations) {
+  const fs::path scratch = scratch_dir("fit_std");
+  write_step_recording(scratch / "step.csv");
+  const RunResult r = run_canalsim("fit --model liom step.csv --bounds L=1.5:1.5 --json fit.json", scratch);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(" ± "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1.5 (± n/a)"), std::string::npos) << r.out;
+  std::ifstream in(scratch / "fit.json");
+  const auto fit = nlohmann::json::parse(in)["fits"][0];
+  EXPECT_GT(fit["std"]["K"].get<double>(), 0.0) << fit["std"].dump();
+  EXPECT_GT(fit["std"]["T"].get<double>(), 0.0) << fit["std"].dump();
+  EXPECT_EQ(fit["std"]["L"].get<double>(), 0.0) << fit["std"].dump();
+  EXPECT_EQ(fit["correlation"]["names"], nlohmann::json({"K", "T", "L"}));
+  const auto& m = fit["correlation"]["matrix"];
+  EXPECT_EQ(m[0][0].get<double>(), 1.0);
+  EXPECT_NEAR(m[0][1].get<double>(), m[1][0].get<double>(), 1e-12);
+  EXPECT_TRUE(m[0][2].is_null()) << m.dump();
+  EXPECT_GE(fit["inflation"].get<double>(), 1.0);
+  fs::remove_all(scratch);
+}
+
 TEST(Fit, BoundsAndStartNameTheModelsParametersAndBadOnesAreOneLineErrors) {
   const fs::path scratch = scratch_dir("fit_bounds");
   write_step_recording(scratch / "step.csv");
@@ -59,7 +83,7 @@ TEST(Fit, BoundsAndStartNameTheModelsParametersAndBadOnesAreOneLineErrors) {
   EXPECT_EQ(ok.code, 0) << ok.err;
   const RunResult pinned = run_canalsim("fit --model liom step.csv --bounds T=5:6", scratch);
   EXPECT_EQ(pinned.code, 0) << pinned.err;
-  EXPECT_NE(pinned.out.find("         6 "), std::string::npos) << pinned.out;  // T on its upper bound
+  EXPECT_NE(pinned.out.find("  6 ± "), std::string::npos) << pinned.out;  // T on its upper bound
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--bounds lambda=0:1", "liom has no parameter lambda (expected K, T, L)"},
       {"--bounds T=5", "expected LO:HI"},

@@ -1,0 +1,216 @@
+// How sure a reduced-model fit is (identification.hpp, FitResult::std): the Jacobian of the
+// output residuals at the fitted model by central differences, and the covariance, standard
+// deviations and correlations from core/statistics.hpp, as calibration reports them.
+//
+// The residuals are those of the least-squares criterion: the model's mean output minus the
+// recording, every sample of every recording, weighted by sqrt(h) as the criterion h Σ e² weighs
+// them (the sandwich is then the covariance of that weighted estimator). The model's mean output
+// is its level without the quantiser of eq. 17 (which has no derivative, and whose mean is the
+// level itself), or, when the polish fitted a quantising sensor's mean reading
+// (sensor_reading.hpp), that reading. The operating points the least-squares criterion estimated
+// are parameters of the Jacobian too (each moves its recording's output by one), nuisance
+// parameters whose uncertainty widens the others' and that are not reported.
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+
+#include "core/statistics.hpp"
+#include "reduced_models/fit_problem.hpp"
+
+namespace canalsim::reduced::detail {
+namespace {
+
+// The parameters the fit moved: not fixed, and with bounds that leave more than one value.
+std::vector<std::string> fitted_names(ModelKind kind, const FitOptions& options) {
+  std::vector<std::string> out;
+  for (const auto& name : parameter_names(kind)) {
+    const ParameterSpec& spec = options.bounds[name];
+    if (!spec.fixed && spec.lower < spec.upper) out.push_back(name);
+  }
+  return out;
+}
+
+// Central-difference step: 1e-4 of the value, or of a floor where the value may be 0 (a sample
+// period for the times, 0.01 for the orders and exponents, 1e-3 for the gains).
+double difference_step(const std::string& name, double value, double h) {
+  const bool time = name == "T" || name == "T2" || name == "Tz" || name == "L";
+  const bool gain = name == "K" || name == "K_sub";
+  const double floor = time ? h : gain ? 1e-3 : 0.01;
+  return 1e-4 * std::max(std::abs(value), floor);
+}
+
+// The recordings the statistics run on, with the operating points of the fit.
+class MeanOutput {
+ public:
+  MeanOutput(const std::vector<const ExperimentData*>& data, const FitResult& r, const FitOptions& options,
+             const ReadingBias* bias)
+      : data_(data), y0_(r.y0_mm), simulation_(options.simulation), bias_(bias && bias->lattice.step > 0.0 ? bias : nullptr) {}
+
+  // The model's level on every recording, one after another (the rows of the Jacobian).
+  // The simulation takes the recording's own y0; the fit's operating point shifts the output,
+  // which is exact for the models whose offsets the least-squares criterion fits (output
+  // linear in K: the forcing does not read the model's level) and a no-op for the others.
+  std::vector<double> operator()(const Model& model) const {
+    Model level = model;
+    level.actuation.quantum_mm = 0.0;
+    std::vector<double> out;
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      const auto y = simulate(level, *data_[j], simulation_).y_dwe_mm;
+      const double shift = j < y0_.size() ? y0_[j] - data_[j]->y0_mm : 0.0;
+      for (double v : y) out.push_back(v + shift);
+    }
+    return out;
+  }
+
+  // The mean output for levels μ: μ, or the sensor's mean reading μ + b(μ).
+  std::vector<double> readings(std::vector<double> mu) const {
+    for (double& v : mu) v = reading(v);
+    return mu;
+  }
+
+  // The fit's operating point of each row: the output of a model whose output is linear in K
+  // is y0 + K g, so d(output)/dK = (output − y0) / K without another simulation.
+  std::vector<double> operating_points() const {
+    std::vector<double> out;
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      out.insert(out.end(), data_[j]->size(), j < y0_.size() ? y0_[j] : data_[j]->y0_mm);
+    }
+    return out;
+  }
+
+  // d(mean output)/d(level) at a level: 1, or 1 + b'(μ) for the sensor's mean reading.
+  double slope(double mu) const {
+    double derivative = 0.0;
+    if (bias_) (*bias_)(mu, derivative);
+    return 1.0 + derivative;
+  }
+
+ private:
+  double reading(double mu) const {  // μ + b(μ), or μ
+    double derivative = 0.0;
+    return bias_ ? mu + (*bias_)(mu, derivative) : mu;
+  }
+
+  const std::vector<const ExperimentData*>& data_;
+  std::vector<double> y0_;
+  SimulationOptions simulation_;
+  const ReadingBias* bias_;
+};
+
+// The column of the Jacobian for `name`: central differences of the mean output, one-sided where
+// the parameter sits on a bound; for K of a model whose output is linear in it, (μ − y0)/K
+// times the reading's slope. `centre`: the levels μ at the fit.
+std::vector<double> difference_column(const MeanOutput& output, const Model& model, const std::string& name,
+                                      const ParameterSpec& spec, double h, const std::vector<double>& centre) {
+  const double value = get_parameter(model.p, name);
+  if (name == "K" && value != 0.0 && output_linear_in_gain(model.kind)) {
+    const std::vector<double> y0 = output.operating_points();
+    std::vector<double> column(centre.size());
+    for (std::size_t i = 0; i < column.size(); ++i) column[i] = output.slope(centre[i]) * (centre[i] - y0[i]) / value;
+    return column;
+  }
+  const double step = difference_step(name, value, h);
+  const double up = std::min(value + step, spec.upper), down = std::max(value - step, spec.lower);
+  auto at = [&](double v) {
+    if (v == value) return centre;
+    Model m = model;
+    set_parameter(m.p, name, v);
+    return output(m);
+  };
+  std::vector<double> column(centre.size(), 0.0);
+  if (!(up > down)) return column;  // no room inside the bounds: the data cannot say
+  const std::vector<double> plus = output.readings(at(up)), minus = output.readings(at(down));
+  for (std::size_t i = 0; i < column.size(); ++i) column[i] = (plus[i] - minus[i]) / (up - down);
+  return column;
+}
+
+// The Jacobian (row-major, rows weighted by sqrt(h)) of the mean output over the fitted
+// parameters and, when fitted, each recording's output offset.
+std::vector<double> output_jacobian(const MeanOutput& output, const FitResult& r,
+                                    const std::vector<const ExperimentData*>& data, const FitOptions& options,
+                                    const std::vector<std::string>& names, bool offsets_fitted,
+                                    const std::vector<double>& centre, std::size_t& columns) {
+  columns = names.size() + (offsets_fitted ? data.size() : 0);
+  std::vector<double> J(centre.size() * columns, 0.0);
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const auto column = difference_column(output, r.model, names[c], options.bounds[names[c]], data.front()->h, centre);
+    for (std::size_t i = 0; i < column.size(); ++i) J[i * columns + c] = column[i];
+  }
+  std::size_t row = 0;
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    for (std::size_t k = 0; k < data[j]->size(); ++k, ++row) {
+      const double weight = std::sqrt(data[j]->h);
+      for (std::size_t c = 0; c < names.size(); ++c) J[row * columns + c] *= weight;
+      if (offsets_fitted) J[row * columns + names.size() + j] = weight * output.slope(centre[row]);
+    }
+  }
+  return J;
+}
+
+// The statistics of the fitted parameters written per name of the model: the fixed ones 0 (std)
+// and NaN (correlations); the offsets (after the fitted parameters) left out.
+void write_statistics(FitResult& r, const std::vector<std::string>& names, const LeastSquaresCovariance& c) {
+  const std::vector<double> std = standard_deviations(c);
+  const std::vector<std::vector<double>> correlation = correlations(c);
+  r.parameter_names = parameter_names(r.model.kind);
+  const std::size_t n = r.parameter_names.size();
+  std::vector<std::size_t> column(n, n);  // the Jacobian column of each name; n: fixed
+  for (std::size_t a = 0; a < n; ++a) {
+    const auto it = std::find(names.begin(), names.end(), r.parameter_names[a]);
+    if (it != names.end()) column[a] = static_cast<std::size_t>(it - names.begin());
+  }
+  r.std.assign(n, 0.0);
+  r.correlation.assign(n, std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
+  for (std::size_t a = 0; a < n; ++a) {
+    if (column[a] == n) continue;
+    r.std[a] = std[column[a]];
+    for (std::size_t b = 0; b < n; ++b) {
+      if (column[b] != n) r.correlation[a][b] = correlation[column[a]][column[b]];
+    }
+  }
+  r.inflation = c.inflation;
+}
+
+// The statistics of the fit `r` (add_fit_statistics guards it).
+void statistics_of(FitResult& r, const std::vector<const ExperimentData*>& data, const FitOptions& options,
+                   bool offsets_fitted, const ReadingBias* bias) {
+  const MeanOutput output(data, r, options, bias);
+  const std::vector<std::string> names = fitted_names(r.model.kind, options);
+  const std::vector<double> centre = output(r.model);  // levels
+  const std::vector<double> mean = output.readings(centre);
+
+  // Residuals: weighted by sqrt(h) for the covariance, unweighted per recording for their
+  // autocorrelation.
+  std::vector<double> residuals(centre.size());
+  std::vector<std::vector<double>> series(data.size());
+  std::size_t row = 0;
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    for (std::size_t k = 0; k < data[j]->size(); ++k, ++row) {
+      series[j].push_back(mean[row] - data[j]->y_dwe_mm[k]);
+      residuals[row] = std::sqrt(data[j]->h) * series[j].back();
+    }
+  }
+  std::size_t columns = 0;
+  const std::vector<double> J = output_jacobian(output, r, data, options, names, offsets_fitted, centre, columns);
+  write_statistics(r, names, least_squares_covariance(J, columns, residuals, series));
+}
+
+}  // namespace
+
+void add_fit_statistics(FitResult& r, const std::vector<const ExperimentData*>& data, const FitOptions& options,
+                        bool offsets_fitted, const ReadingBias* bias) {
+  // A model the fit reached but that cannot be simulated a step away (parameters the simulation
+  // refuses) keeps its fit: its statistics are left not computed (NaN), never an exception.
+  try {
+    statistics_of(r, data, options, offsets_fitted, bias);
+  } catch (const std::exception&) {
+    r.parameter_names = parameter_names(r.model.kind);
+    const std::size_t n = r.parameter_names.size();
+    r.std.assign(n, std::numeric_limits<double>::quiet_NaN());
+    r.correlation.assign(n, std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
+    r.inflation = std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+}  // namespace canalsim::reduced::detail
