@@ -144,15 +144,4 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
   return out;
 }
 
-std::vector<double> optimum_shift(const std::vector<double>& jacobian, const std::vector<double>& change,
-                                  std::size_t parameters) {
-  const auto p = static_cast<Eigen::Index>(parameters);
-  const auto n = static_cast<Eigen::Index>(change.size());
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobian.data(), n, p);
-  const Eigen::Map<const Eigen::VectorXd> d(change.data(), n);
-  // Complete orthogonal decomposition: the minimum-norm solution when J is rank deficient.
-  const Eigen::VectorXd delta = J.completeOrthogonalDecomposition().solve(-d);
-  return std::vector<double>(delta.data(), delta.data() + p);
-}
-
 }  // namespace canalsim::calibration

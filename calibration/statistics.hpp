@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "calibration/parameters.hpp"
+#include "core/statistics.hpp"
 
 namespace canalsim::calibration {
 
@@ -39,10 +40,7 @@ ParameterStatistics parameter_statistics(const std::vector<Parameter>& parameter
                                          const std::vector<double>& jacobian, const std::vector<double>& residuals,
                                          const std::vector<std::vector<double>>& series);
 
-// The Gauss–Newton shift of the optimum when the residuals change by `change` (N): the least-squares
-// δ minimising |change + J δ|, in the search coordinates. The grid check uses it: how far the
-// estimates would move if the model ran on twice the cells.
-std::vector<double> optimum_shift(const std::vector<double>& jacobian, const std::vector<double>& change,
-                                  std::size_t parameters);
+// The Gauss–Newton shift of the optimum when the residuals change: core/statistics.hpp.
+using canalsim::optimum_shift;
 
 }  // namespace canalsim::calibration

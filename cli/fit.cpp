@@ -75,17 +75,20 @@ nlohmann::json parameters_json(const Model& m) {
 }
 
 // How sure the fit is: "std" per parameter (the units of "parameters"; null where not
-// determined), "correlation" {names, matrix} (null for a parameter held fixed or not determined)
-// and the autocorrelation "inflation" of the variances.
+// determined), its part due to the model's time step "numerical_std", "correlation" {names,
+// matrix} (null for a parameter held fixed or not determined) and the autocorrelation
+// "inflation" of the variances.
 void add_statistics_json(nlohmann::json& j, const FitResult& r) {
-  nlohmann::json std = nlohmann::json::object(), matrix = nlohmann::json::array();
+  nlohmann::json std = nlohmann::json::object(), numerical = nlohmann::json::object(), matrix = nlohmann::json::array();
   for (std::size_t a = 0; a < r.parameter_names.size(); ++a) {
     std[r.parameter_names[a]] = json_number(r.std[a]);
+    numerical[r.parameter_names[a]] = json_number(r.numerical_std[a]);
     nlohmann::json row = nlohmann::json::array();
     for (double rho : r.correlation[a]) row.push_back(json_number(rho));
     matrix.push_back(std::move(row));
   }
   j["std"] = std;
+  j["numerical_std"] = numerical;
   j["correlation"] = {{"names", r.parameter_names}, {"matrix", matrix}};
   j["inflation"] = json_number(r.inflation);
 }

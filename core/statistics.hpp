@@ -67,4 +67,11 @@ std::vector<double> standard_deviations(const LeastSquaresCovariance& covariance
 // parameters, 0 for a pair one of which has zero variance.
 std::vector<std::vector<double>> correlations(const LeastSquaresCovariance& covariance);
 
+// The Gauss–Newton shift of the optimum when the residuals change by `change` (N): the
+// least-squares δ minimising |change + J δ| (`jacobian` N × p, row-major), the minimum-norm one
+// when J is rank deficient. How far the estimates would move were the model computed otherwise:
+// calibration's grid check (twice the cells), a reduced model's half time step.
+std::vector<double> optimum_shift(const std::vector<double>& jacobian, const std::vector<double>& change,
+                                  std::size_t parameters);
+
 }  // namespace canalsim

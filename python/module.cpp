@@ -289,9 +289,31 @@ py::dict fit_dict(const reduced::FitResult& r, const std::vector<reduced::Experi
                               py::arg("y0_mm") = r.y0_mm.empty() ? d.y0_mm : r.y0_mm[i],
                               py::arg("y_up_mm") = mean_of(d.y_up_mm)));
   }
+  // The std, its numerical part and the correlations of the parameters the fit moved.
+  py::dict std, numerical_std;
+  std::vector<std::string> names;
+  std::vector<std::size_t> rows;
+  for (std::size_t a = 0; a < r.parameter_names.size() && a < r.std.size(); ++a) {
+    std[py::str(r.parameter_names[a])] = r.std[a];
+    if (a < r.numerical_std.size()) numerical_std[py::str(r.parameter_names[a])] = r.numerical_std[a];
+    if (r.std[a] != 0.0) {  // 0: held fixed, not fitted
+      names.push_back(r.parameter_names[a]);
+      rows.push_back(a);
+    }
+  }
+  std::vector<std::vector<double>> correlation;
+  for (std::size_t a : rows) {
+    correlation.emplace_back();
+    for (std::size_t b : rows) correlation.back().push_back(r.correlation[a][b]);
+  }
   py::dict out;
   out["model"] = reduced::model_name(r.model.kind);
   out["parameters"] = parameters;
+  out["std"] = std;
+  out["numerical_std"] = numerical_std;
+  out["std_names"] = names;
+  out["correlation"] = correlation;
+  out["inflation"] = r.inflation;
   out["head_ref_mm"] = r.model.p.head_ref_mm;  // H of the nonlinear models' head terms
   out["head_ref_sub_mm"] = r.model.p.head_ref_sub_mm;
   out["nrmse"] = r.nrmse;

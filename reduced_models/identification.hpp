@@ -141,6 +141,10 @@ struct FitResult {
   // lo == hi, a fixed start, the γ of a sweep): it was not fitted. +inf where the recordings do
   // not determine it (an exact trade-off with another parameter, or no dependence at all).
   std::vector<double> std;
+  // The part of std due to the model's time step (fit_statistics.cpp: twice the shift of the
+  // optimum were the model computed at half the step); std combines it with the statistical part
+  // as a root sum of squares. 0 for the integer-order models, which are simulated exactly.
+  std::vector<double> numerical_std;
   // Correlations between the estimates; NaN in the rows and columns of fixed or undetermined
   // parameters.
   std::vector<std::vector<double>> correlation;

@@ -136,8 +136,10 @@ def write_recording(df: pd.DataFrame, path: Union[str, os.PathLike]) -> None:
 class FitResult:
     """A reduced model fitted to one recording (or, nominal, to several; paper eq. 21).
 
-    ``parameters`` and ``std`` by name (K, T, lambda, L, ...; the units of docs/reduced-models.md);
-    ``correlation`` a DataFrame over the fitted parameters; ``nrmse`` (%, eq. 19) and ``iae``
+    ``parameters`` and ``std`` by name (K, T, lambda, L, ...; the units of docs/reduced-models.md;
+    std 0 for a parameter held fixed): the noise's part, widened for the residuals'
+    autocorrelation (``inflation``), and the model's time step's part (``numerical_std``),
+    combined; ``correlation`` a DataFrame over the fitted parameters; ``nrmse`` (%, eq. 19) and ``iae``
     (mm s, eq. 20) per recording; ``response`` a DataFrame with t_s, the recorded and the model's
     y_dwe_mm per recording.
     """
@@ -151,6 +153,8 @@ class FitResult:
     converged: bool
     message: str
     recordings: List[str] = field(default_factory=list)
+    numerical_std: Dict[str, float] = field(default_factory=dict)
+    inflation: float = float("nan")
     operating_point: Dict[str, float] = field(default_factory=dict)
 
     def frequency_response(self, omega) -> np.ndarray:
@@ -175,6 +179,7 @@ def _fit_result(d: dict) -> FitResult:
                      correlation=correlation, nrmse=list(d["nrmse"]), iae=list(d["iae"]),
                      response=pd.concat(frames, ignore_index=True), converged=d["converged"],
                      message=d["message"], recordings=[r["recording"] for r in d["responses"]],
+                     numerical_std=dict(d["numerical_std"]), inflation=d["inflation"],
                      operating_point={"u0_mm": d["responses"][0]["u0_mm"], "y0_mm": d["responses"][0]["y0_mm"],
                                       "y_up_mm": d["responses"][0]["y_up_mm"], "head_ref_mm": d["head_ref_mm"],
                                       "head_ref_sub_mm": d["head_ref_sub_mm"]})

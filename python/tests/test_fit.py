@@ -82,8 +82,8 @@ def test_fit_equals_the_command_lines_fit_of_the_same_file(cli, tmp_path):
     fit = canalsim.fit("lfom", tmp_path / "lfom.csv")
     for name, value in expected["parameters"].items():
         assert fit.parameters[name] == pytest.approx(value, rel=1e-12), name
-    assert fit.nrmse[0] == pytest.approx(expected["nrmse"], rel=1e-12)
-    assert np.allclose(fit.response["model_y_dwe_mm"], expected["model_y_dwe_mm"], rtol=1e-12)
-    if "std" in expected:
-        for name, value in expected["std"].items():
-            assert fit.std[name] == pytest.approx(value, rel=1e-9), name
+    assert fit.nrmse[0] == pytest.approx(expected["recordings"][0]["nrmse"], rel=1e-12)
+    assert np.allclose(fit.response["model_y_dwe_mm"], expected["recordings"][0]["model_y_dwe_mm"], rtol=1e-12)
+    for name, value in expected["std"].items():
+        assert fit.std[name] == pytest.approx(value, rel=1e-9), name
+        assert fit.numerical_std[name] == pytest.approx(expected["numerical_std"][name], rel=1e-9, abs=1e-15), name
