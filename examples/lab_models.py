@@ -32,7 +32,8 @@ def plot_time(ax, name, recording, fits):
     for model, fit in fits.items():
         ax.plot(fit.response["t_s"], fit.response["model_y_dwe_mm"], lw=1.0,
                 label=f"{model.upper()} (Nrmse {fit.nrmse[0]:.1f} %)")
-    ax.set_title(f"{name}: downstream-end level", loc="left", fontsize=10)
+    ax.set_title(f"{name}: downstream-end level, the first 60 s", loc="left", fontsize=10)
+    ax.set_xlim(0, 60)
     ax.set_ylabel("y_dwe [mm]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")

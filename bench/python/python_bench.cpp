@@ -1,7 +1,8 @@
 // The Python package's per-call overhead: `canalsim.simulate("lab", "op1")` (scenario text parsed,
 // the run, the recording handed over as numpy arrays and made a DataFrame) against the library's
 // load_scenario_or_builtin + simulate that the command line calls, timed in one process so that
-// the machine's load falls on both alike. The overhead is the ratio of the two medians minus one.
+// the machine's load falls on both alike. The overhead is the ratio of the two medians minus one;
+// the module's own call (no DataFrame) splits it into the Python half and the compiled half.
 #include <benchmark/benchmark.h>
 #include <pybind11/embed.h>
 
@@ -29,6 +30,18 @@ py::module_& canalsim_package() {
   return package;
 }
 
+// The compiled module's own simulate, without the DataFrame: the layer's C++ half (scenario text
+// parsed, the run, the columns copied into numpy arrays).
+void BM_SimulateThroughTheModule(benchmark::State& state) {
+  py::module_& canalsim = canalsim_package();
+  const py::object simulate = canalsim.attr("_canalsim").attr("simulate");
+  const py::object text = canalsim.attr("_canalsim").attr("scenario_text")("lab");
+  for (auto _ : state) {
+    py::object columns = simulate(text, "lab", "op1", false, py::none());
+    benchmark::DoNotOptimize(columns.ptr());
+  }
+}
+
 void BM_SimulateFromPython(benchmark::State& state) {
   py::module_& canalsim = canalsim_package();
   const py::object simulate = canalsim.attr("simulate");
@@ -41,5 +54,6 @@ void BM_SimulateFromPython(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_SimulateFromTheLibrary)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SimulateThroughTheModule)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SimulateFromPython)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();
