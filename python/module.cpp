@@ -9,7 +9,6 @@
 
 #include <filesystem>
 #include <map>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -115,19 +114,24 @@ std::vector<std::string> experiment_names(const std::string& text, const std::st
   return names;
 }
 
-// "pools[1].manning_n" → toml++'s "pools[0].manning_n".
+// "pools[1].manning_n" → toml++'s "pools[0].manning_n": every [N] one less.
 std::string toml_path(const std::string& key) {
   std::string path;
-  const std::regex index(R"(\[(\d+)\])");
-  auto begin = std::sregex_iterator(key.begin(), key.end(), index);
-  std::size_t last = 0;
-  for (auto it = begin; it != std::sregex_iterator(); ++it) {
-    const long i = std::stol((*it)[1].str());
-    if (i < 1) throw InputError("scenario key " + key + ": array indices start at 1");
-    path += key.substr(last, static_cast<std::size_t>(it->position()) - last) + "[" + std::to_string(i - 1) + "]";
-    last = static_cast<std::size_t>(it->position() + it->length());
+  std::size_t at = 0;
+  while (at < key.size()) {
+    const std::size_t open = key.find('[', at);
+    const std::size_t close = open == std::string::npos ? open : key.find(']', open);
+    if (close == std::string::npos) return path + key.substr(at);
+    const std::string digits = key.substr(open + 1, close - open - 1);
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) {
+      throw InputError("scenario key " + key + ": expected an array index [1], [2], ... after " + key.substr(0, open));
+    }
+    const long index = std::stol(digits);
+    if (index < 1) throw InputError("scenario key " + key + ": array indices start at 1");
+    path += key.substr(at, open - at) + "[" + std::to_string(index - 1) + "]";
+    at = close + 1;
   }
-  return path + key.substr(last);
+  return path;
 }
 
 py::object scenario_value(const std::string& text, const std::string& source, const std::string& key) {
