@@ -169,10 +169,13 @@ std::vector<double> optimum_shift(const std::vector<double>& jacobian, const std
                                   std::size_t parameters) {
   const auto p = static_cast<Eigen::Index>(parameters);
   const auto n = static_cast<Eigen::Index>(change.size());
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobian.data(), n, p);
+  const RowMajorMap J(jacobian.data(), n, p);
   const Eigen::Map<const Eigen::VectorXd> d(change.data(), n);
-  // Complete orthogonal decomposition: the minimum-norm solution when J is rank deficient.
-  const Eigen::VectorXd delta = J.completeOrthogonalDecomposition().solve(-d);
+  // δ = −(JᵀJ)⁺ Jᵀ d with the covariance's pseudo-inverse: the directions the Jacobian does not
+  // determine are left unmoved (the minimum-norm solution in the column-scaled coordinates).
+  LeastSquaresCovariance scratch;
+  scratch.undetermined.assign(parameters, false);
+  const Eigen::VectorXd delta = -scaled_pseudo_inverse(J, scratch) * (J.transpose() * d);
   return std::vector<double>(delta.data(), delta.data() + p);
 }
 

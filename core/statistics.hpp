@@ -68,9 +68,10 @@ std::vector<double> standard_deviations(const LeastSquaresCovariance& covariance
 std::vector<std::vector<double>> correlations(const LeastSquaresCovariance& covariance);
 
 // The Gauss–Newton shift of the optimum when the residuals change by `change` (N): the
-// least-squares δ minimising |change + J δ| (`jacobian` N × p, row-major), the minimum-norm one
-// when J is rank deficient. How far the estimates would move were the model computed otherwise:
-// calibration's grid check (twice the cells), a reduced model's half time step.
+// least-squares δ minimising |change + J δ| (`jacobian` N × p, row-major), by the pseudo-inverse
+// of least_squares_covariance: directions J does not determine are left unmoved. How far the
+// estimates would move were the model computed otherwise: calibration's grid check (twice the
+// cells), a reduced model's finer time step.
 std::vector<double> optimum_shift(const std::vector<double>& jacobian, const std::vector<double>& change,
                                   std::size_t parameters);
 
