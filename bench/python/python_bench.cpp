@@ -1,10 +1,14 @@
 // The Python package's per-call overhead: `canalsim.simulate("lab", "op1")` (scenario text parsed,
 // the run, the recording handed over as numpy arrays and made a DataFrame) against the library's
-// load_scenario_or_builtin + simulate that the command line calls, timed in one process so that
-// the machine's load falls on both alike. The overhead is the ratio of the two medians minus one;
-// the module's own call (no DataFrame) splits it into the Python half and the compiled half.
+// load_scenario_or_builtin + simulate that the command line calls, timed in one process. The
+// machine is shared and its load changes within seconds, so the two are timed in pairs: each
+// iteration makes one call of each, in alternating order, and the overhead is the ratio of the two
+// sums minus one. The compiled module's own call (no DataFrame) splits it into the Python half and
+// the compiled half.
 #include <benchmark/benchmark.h>
 #include <pybind11/embed.h>
+
+#include <chrono>
 
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
@@ -12,13 +16,6 @@
 namespace py = pybind11;
 
 namespace {
-
-void BM_SimulateFromTheLibrary(benchmark::State& state) {
-  for (auto _ : state) {
-    const auto lab = canalsim::scenarios::load_scenario_or_builtin("lab");
-    benchmark::DoNotOptimize(canalsim::scenarios::simulate(lab, *lab.find_experiment("op1")));
-  }
-}
 
 // One interpreter for the program; the package is this build's (CANALSIM_PYTHON_DIR).
 py::module_& canalsim_package() {
@@ -30,30 +27,61 @@ py::module_& canalsim_package() {
   return package;
 }
 
-// The compiled module's own simulate, without the DataFrame: the layer's C++ half (scenario text
-// parsed, the run, the columns copied into numpy arrays).
-void BM_SimulateThroughTheModule(benchmark::State& state) {
-  py::module_& canalsim = canalsim_package();
-  const py::object simulate = canalsim.attr("_canalsim").attr("simulate");
-  const py::object text = canalsim.attr("_canalsim").attr("scenario_text")("lab");
-  for (auto _ : state) {
-    py::object columns = simulate(text, "lab", "op1", false, py::none());
-    benchmark::DoNotOptimize(columns.ptr());
-  }
+template <class Call>
+double seconds_of(const Call& call) {
+  const auto start = std::chrono::steady_clock::now();
+  call();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void BM_SimulateFromPython(benchmark::State& state) {
+void simulate_from_the_library() {
+  const auto lab = canalsim::scenarios::load_scenario_or_builtin("lab");
+  benchmark::DoNotOptimize(canalsim::scenarios::simulate(lab, *lab.find_experiment("op1")));
+}
+
+enum class PythonLayer { package = 0, compiled_module = 1 };
+
+// Argument: the PythonLayer timed against the library. Counters: the two means per call and the
+// overhead in %.
+void BM_PythonOverLibraryInPairs(benchmark::State& state) {
   py::module_& canalsim = canalsim_package();
-  const py::object simulate = canalsim.attr("simulate");
+  const py::object package_simulate = canalsim.attr("simulate");
+  const py::object module_simulate = canalsim.attr("_canalsim").attr("simulate");
+  const py::object lab_text = canalsim.attr("_canalsim").attr("scenario_text")("lab");
+  const auto layer = static_cast<PythonLayer>(state.range(0));
+  const auto simulate_from_python = [&] {
+    if (layer == PythonLayer::package) {
+      benchmark::DoNotOptimize(package_simulate("lab", "op1").ptr());
+    } else {
+      benchmark::DoNotOptimize(module_simulate(lab_text, "lab", "op1", false, py::none()).ptr());
+    }
+  };
+
+  double library_seconds = 0.0;
+  double python_seconds = 0.0;
+  bool library_first = true;
   for (auto _ : state) {
-    py::object frame = simulate("lab", "op1");
-    benchmark::DoNotOptimize(frame.ptr());
+    if (library_first) {
+      library_seconds += seconds_of(simulate_from_the_library);
+      python_seconds += seconds_of(simulate_from_python);
+    } else {
+      python_seconds += seconds_of(simulate_from_python);
+      library_seconds += seconds_of(simulate_from_the_library);
+    }
+    library_first = !library_first;
   }
+  const double calls = static_cast<double>(state.iterations());
+  state.counters["library_ms"] = 1e3 * library_seconds / calls;
+  state.counters["python_ms"] = 1e3 * python_seconds / calls;
+  state.counters["overhead_pct"] = 100.0 * (python_seconds / library_seconds - 1.0);
 }
 
 }  // namespace
 
-BENCHMARK(BM_SimulateFromTheLibrary)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SimulateThroughTheModule)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SimulateFromPython)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PythonOverLibraryInPairs)
+    ->ArgName("layer")
+    ->Arg(static_cast<int>(PythonLayer::package))
+    ->Arg(static_cast<int>(PythonLayer::compiled_module))
+    ->Iterations(20)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -13,6 +13,7 @@ import pandas as pd
 Recording = Union[str, os.PathLike, pd.DataFrame]
 
 _REGIME_WORDS = ["free", "submerged"]  # by RegimeCode (core/recording.hpp)
+_REGIME_DTYPE = pd.CategoricalDtype(_REGIME_WORDS)  # made once: pandas checks the categories each time
 _REGIME_CODES = {"free": 0.0, "submerged": 1.0}
 
 
@@ -21,9 +22,9 @@ def frame(recording: dict) -> pd.DataFrame:
     columns = {}
     for name, values in zip(recording["names"], recording["columns"]):
         if name == "regime":
-            columns[name] = pd.Categorical.from_codes(np.rint(values).astype(np.int8), categories=_REGIME_WORDS)
+            columns[name] = pd.Categorical.from_codes(np.rint(values).astype(np.int8), dtype=_REGIME_DTYPE)
         else:
-            columns[name] = np.asarray(values)
+            columns[name] = values  # a float64 numpy array from the module
     df = pd.DataFrame(columns, copy=False)
     df.attrs = dict(recording["metadata"])
     df.attrs["source"] = recording["source"]
