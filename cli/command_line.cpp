@@ -1,11 +1,15 @@
 // The command line: subcommand registration, parsing and the one-line error contract.
+#include <chrono>
 #include <exception>
 #include <iostream>
 #include <new>
 #include <string>
+#include <thread>
 
 #include "cli/command_line.hpp"
 #include "cli/commands.hpp"
+#include "cluster/distribute.hpp"
+#include "core/errors.hpp"
 
 namespace {
 
@@ -80,6 +84,28 @@ void refuse_empty_values(CLI::App& app) {
   }
 }
 
+// Under mpirun every process runs the command line: only the commands that share their work out
+// (cluster/distribute.hpp) may, or each process would write the same outputs.
+void refuse_several_processes_unless_distributed(int argc, char** argv) {
+  if (cluster::processes() == 1) return;
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word.front() == '-') continue;
+    if (word == "sweep" || word == "blindtest") return;
+    throw InputError("canalsim " + word + " runs on one process, not " + std::to_string(cluster::processes()) +
+                     ": expected mpirun only with sweep or blindtest");
+  }
+}
+
+// An error in an MPI job: the other processes may be waiting for this one, so the job stops.
+// An error met by every process (a bad input) is printed once, by rank 0: the others wait a
+// second, and are stopped by rank 0's abort before they print.
+[[noreturn]] void stop_the_job(const std::string& message) {
+  if (cluster::is_root()) cluster::abort_job(one_line(message));
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  cluster::abort_job("rank " + std::to_string(cluster::rank()) + ": " + one_line(message));
+}
+
 }  // namespace
 
 void add_all_commands(CLI::App& app) {
@@ -103,6 +129,7 @@ void add_all_commands(CLI::App& app) {
 
 int run_command_line(CLI::App& app, int argc, char** argv) {
   try {
+    refuse_several_processes_unless_distributed(argc, argv);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return report_parse_error(app, e, argc, argv);
@@ -114,6 +141,7 @@ int run_command_line(CLI::App& app, int argc, char** argv) {
               << "(shorter or coarser recordings, fewer cells)\n";
     return 1;
   } catch (const std::exception& e) {
+    if (cluster::processes() > 1) stop_the_job(e.what());
     std::cerr << "canalsim: error: " << one_line(e.what()) << '\n';
     return 1;
   }
