@@ -8,6 +8,7 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "cluster/distribute.hpp"
 #include "diagnosis/blindtest.hpp"
 #include "reduced_models/models.hpp"
 #include "scenarios/builtin.hpp"
@@ -67,8 +68,16 @@ void run(const BlindtestArguments& args) {
   }
   if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
   const int total = args.trials + (args.realistic ? args.two_effect_trials : 0);
-  ProgressLine progress(std::string(args.realistic ? "realistic " : "") + "blind test, " + std::to_string(total) + " trials on " +
-                        std::to_string(args.threads) + " threads");
+  // Under mpirun every process runs trials; rank 0 alone reports them (cluster/distribute.hpp).
+  if (!cluster::is_root()) {
+    diagnosis::run_blindtest(s, options);
+    return;
+  }
+  const std::string threads = std::to_string(args.threads) + (args.threads == 1 ? " thread" : " threads");
+  const std::string where =
+      cluster::processes() > 1 ? std::to_string(cluster::processes()) + " processes of " + threads : threads;
+  ProgressLine progress(std::string(args.realistic ? "realistic " : "") + "blind test, " + std::to_string(total) +
+                        " trials on " + where);
   options.progress = progress.callback();
   const diagnosis::BlindtestResult result = diagnosis::run_blindtest(s, options);
   progress.finish();

@@ -40,7 +40,7 @@ class ArchiveWriter {
       if (present) write(*value);
     } else if constexpr (requires { value.begin(); value.resize(0); }) {
       write_size(value.size());
-      for (auto& item : value) write_item(item);
+      for (auto&& item : value) write_item(item);
     } else {
       fields(*this, value);
     }

@@ -272,7 +272,7 @@ std::vector<std::string> distribute(std::size_t count, const std::function<std::
   while (!cursor.done() || pool.in_flight() > 0 || others_asking > 0 || with_others > 0) {
     while (!cursor.done() && pool.in_flight() < pool.capacity()) pool.submit(cursor.take());
 #ifdef CANALSIM_HAVE_MPI
-    for (;;) {
+    while (g_mpi_started) {
       int waiting = 0;
       MPI_Status status;
       MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &waiting, &status);

@@ -10,9 +10,10 @@
 #include <numeric>
 #include <sstream>
 
+#include "cluster/archive.hpp"
+#include "cluster/distribute.hpp"
 #include "core/json.hpp"
 #include "core/format.hpp"
-#include "core/parallel.hpp"
 #include "diagnosis/blindtest_trial.hpp"
 #include "scenarios/outside_catalog.hpp"
 #include "scenarios/simulate.hpp"
@@ -134,6 +135,19 @@ bool names_effect(const std::string& verdict, const std::string& concealed, bool
   return !gate_position_recorded && twin && verdict == twin;
 }
 
+// A trial's fields as they travel from the process that ran it to rank 0 (cluster/archive.hpp).
+template <class Archive>
+void fields(Archive& a, EffectValue& e) {
+  a(e.effect, e.value);
+}
+template <class Archive>
+void fields(Archive& a, Trial& t) {
+  a(t.index, t.truth, t.second, t.verdict, t.reason, t.form, t.named, t.both_named, t.truth_drawn, t.estimate,
+    t.channel_right, t.below_threshold, t.truth_location, t.located, t.signature_rms_mm, t.model_error_mm,
+    t.below_model_error, t.parameter_error, t.heldout_gain, t.correct, t.seconds, t.simulation_seconds,
+    t.calibration_seconds, t.message);
+}
+
 namespace {
 
 // The experiments every trial records, shortened to the test's duration.
@@ -199,14 +213,13 @@ std::vector<Trial> draw_trials(const BlindtestOptions& o, const std::vector<std:
   return trials;
 }
 
-// Runs every trial, o.threads at a time. Each trial catches its own failure (verdict "failed"),
-// so one bad trial does not end the test.
+// Runs every trial over the processes of the job (cluster/distribute.hpp), o.threads at a time in
+// each; rank 0 receives them all. Each trial catches its own failure (verdict "failed"), so one
+// bad trial does not end the test. A trial's outcome depends on its index only, not on the
+// process or thread that ran it.
 void run_trials(const blind::TrialContext& context, std::vector<Trial>& trials, const BlindtestOptions& o) {
-  std::atomic<int> done{0};
-  std::mutex progress_mutex;
-  const int total = static_cast<int>(trials.size());
-  parallel_for(trials.size(), o.threads, [&](std::size_t i) {
-    Trial& trial = trials[i];
+  const auto run_one = [&](std::size_t i) {
+    Trial trial = trials[i];
     const auto t0 = std::chrono::steady_clock::now();
     try {
       blind::run_trial(context, trial);
@@ -215,12 +228,21 @@ void run_trials(const blind::TrialContext& context, std::vector<Trial>& trials, 
       trial.message = ex.what();
     }
     trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const int finished = ++done;
+    return cluster::archive(trial);
+  };
+  std::size_t finished = 0;
+  cluster::DistributeOptions distribution;
+  distribution.threads = o.threads;
+  distribution.on_result = [&](std::size_t, const std::string&) {
+    ++finished;
     if (o.progress) {
-      const std::lock_guard lock(progress_mutex);
-      o.progress({static_cast<double>(finished) / total, std::to_string(finished) + "/" + std::to_string(total) + " trials"});
+      o.progress({static_cast<double>(finished) / static_cast<double>(trials.size()),
+                  std::to_string(finished) + "/" + std::to_string(trials.size()) + " trials"});
     }
-  });
+  };
+  const std::vector<std::string> outcomes = cluster::distribute(trials.size(), run_one, distribution);
+  if (!cluster::is_root()) return;
+  for (std::size_t i = 0; i < trials.size(); ++i) cluster::unarchive(outcomes[i], trials[i]);
 }
 
 // The confusion matrix (rows: the drawn classes; columns: those and `unexplained`) and the
@@ -309,6 +331,7 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
   context.diagnose.threads = 1;
   context.diagnose.progress = nullptr;
   run_trials(context, result.trials, o);
+  if (!cluster::is_root()) return {};  // rank 0 holds the trials and reports them
   tally(classes, result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return result;
@@ -320,7 +343,7 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
   s << (o.realistic ? "Realistic diagnosis blind test: " : "Diagnosis blind test: ") << r.trials.size()
     << " trials, seed " << o.seed << ", experiments";
   for (const auto& e : o.experiments) s << ' ' << e;
-  s << (o.duration_s > 0.0 ? " (" + std::to_string(o.duration_s) + " s)" : "")
+  s << (o.duration_s > 0.0 ? " (" + format_g(o.duration_s) + " s)" : "")
     << (o.realistic ? "" : ", level noise " + format_g(o.noise_std_mm) + " mm") << '\n';
   if (o.realistic) {
     const RealisticTruth& t = *o.realistic;

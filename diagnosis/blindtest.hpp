@@ -190,7 +190,9 @@ double parameter_error(const ConcealedEffect& truth, double estimate);
 // the recordings hold no gate position to tell them apart.
 bool names_effect(const std::string& verdict, const std::string& concealed, bool gate_position_recorded);
 
-// Runs the benchmark. Throws InputError on invalid options or unknown experiments.
+// Runs the benchmark. Throws InputError on invalid options or unknown experiments. In an MPI job
+// every process calls it with the same options and the trials are spread over them
+// (cluster/distribute.hpp); rank 0 returns the result, the others an empty one.
 BlindtestResult run_blindtest(const scenarios::Scenario& scenario, const BlindtestOptions& options);
 
 std::string format_blindtest(const BlindtestResult& result, const BlindtestOptions& options);
