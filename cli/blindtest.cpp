@@ -136,8 +136,10 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "Trials in parallel (default 2)")->check(thread_count());
   cmd->add_option("--duration", args->duration, "Shorten every experiment to this many seconds, >= 20 (default: full)")
       ->check(duration_check());
-  cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial (default op1 op2 op3 op4)");
-  cmd->add_option("--effects", args->effects, "Draw only these effects (and none): catalog rows (a per-channel row goes on a drawn level channel), sensor_offset[y_dwe_mm], or with --realistic gate_backlash and depth_seepage; default the whole catalog, and with --realistic those two");
+  cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial, by spaces or commas (default op1 op2 op3 op4)")
+      ->delimiter(',');
+  cmd->add_option("--effects", args->effects, "Draw only these effects (and none), by spaces or commas: catalog rows (a per-channel row goes on a drawn level channel), sensor_offset[y_dwe_mm], or with --realistic gate_backlash and depth_seepage; default the whole catalog, and with --realistic those two")
+      ->delimiter(',');
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
   cmd->add_flag("--realistic", args->realistic,
                 "Truth simulated differently (4x cells, other limiter and Courant number) with perturbed "

@@ -8,6 +8,8 @@ CANALSIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # (libFuzzer) build the fuzz targets only (fuzz/, scripts/fuzz); everything else uses g++. The
 # Python package (python/) needs the interpreter's headers and pybind11; numpy, pandas, pytest
 # and matplotlib (the worked example's plots) come from Debian too, for Debian's /usr/bin/python3.
+# Open MPI (libopenmpi-dev, openmpi-bin) runs sweeps and blind tests on several processes
+# (`mpirun -n N canalsim sweep|blindtest`; the tests run it on two).
 CANALSIM_PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsundials-dev libsuitesparse-dev
@@ -15,6 +17,7 @@ CANALSIM_PACKAGES=(
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libnlopt-cxx-dev libceres-dev
   clang-14 libclang-rt-14-dev
   python3-dev pybind11-dev python3-numpy python3-pandas python3-pytest python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 
 canalsim_log() { printf '==> %s\n' "$*" >&2; }
