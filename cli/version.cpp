@@ -13,6 +13,7 @@
 #include <toml++/impl/version.h>  // the version macros only, not the whole parser
 
 #include "cli/commands.hpp"
+#include "cluster/distribute.hpp"
 
 #ifndef CANALSIM_VERSION
 #define CANALSIM_VERSION "unknown"
@@ -22,7 +23,7 @@ namespace canalsim::cli {
 
 namespace {
 
-// Three lines, without a final newline.
+// Four lines, without a final newline.
 std::string version_text() {
   std::ostringstream out;
   out << "canalsim " << CANALSIM_VERSION << "\n"
@@ -32,7 +33,8 @@ std::string version_text() {
       << KLU_SUB_VERSION << '.' << KLU_SUBSUB_VERSION << ")\n"
       << "  toml++ " << TOML_LIB_MAJOR << '.' << TOML_LIB_MINOR << '.' << TOML_LIB_PATCH << ", nlohmann_json "
       << NLOHMANN_JSON_VERSION_MAJOR << '.' << NLOHMANN_JSON_VERSION_MINOR << '.' << NLOHMANN_JSON_VERSION_PATCH
-      << ", CLI11 " << CLI11_VERSION;
+      << ", CLI11 " << CLI11_VERSION << "\n"
+      << "  MPI: " << (cluster::built_with_mpi() ? cluster::mpi_library_version() : "not built in (one process)");
   return out.str();
 }
 

@@ -240,6 +240,18 @@ bool built_with_mpi() {
 #endif
 }
 
+std::string mpi_library_version() {
+#ifdef CANALSIM_HAVE_MPI
+  char text[MPI_MAX_LIBRARY_VERSION_STRING] = {};
+  int length = 0;
+  MPI_Get_library_version(text, &length);  // allowed before MPI_Init (MPI 3.1, 8.1.1)
+  const std::string full(text, static_cast<std::size_t>(length));
+  return full.substr(0, full.find_first_of(",\n"));
+#else
+  return "";
+#endif
+}
+
 void abort_job(const std::string& message) {
   std::cerr << "canalsim: error: " << message << '\n' << std::flush;
 #ifdef CANALSIM_HAVE_MPI

@@ -32,8 +32,10 @@ int rank();
 int processes();
 inline bool is_root() { return rank() == 0; }
 
-// Whether this build can run on several processes (built with MPI).
+// Whether this build can run on several processes (built with MPI), and the MPI library's name and
+// version ("Open MPI v4.1.4"; empty without MPI).
 bool built_with_mpi();
+std::string mpi_library_version();
 
 // Stops every process of the job after printing `message` as the program's one-line error (an
 // error that only this process met, which the others would wait for forever); outside an MPI job,

@@ -57,7 +57,7 @@ TEST(Outputs, VersionNamesTheLibrariesItWasBuiltWith) {
   const fs::path scratch = scratch_dir("outputs_version");
   const RunResult r = run_canalsim("version", scratch);
   EXPECT_EQ(r.code, 0) << r.err;
-  for (const char* library : {"Eigen ", "SUNDIALS ", "SuiteSparse ", "KLU ", "toml++ ", "nlohmann_json ", "CLI11 "}) {
+  for (const char* library : {"Eigen ", "SUNDIALS ", "SuiteSparse ", "KLU ", "toml++ ", "nlohmann_json ", "CLI11 ", "MPI: "}) {
     EXPECT_NE(r.out.find(library), std::string::npos) << library << " missing from\n" << r.out;
   }
   fs::remove_all(scratch);
