@@ -55,14 +55,14 @@ std::string report_without_timings(const std::string& report) {
 
 TEST(MpiRun, BlindtestOnTwoProcessesGivesTheTrialsOfOne) {
   const fs::path dir = scratch_dir("mpi_blindtest");
-  const std::string arguments = "blindtest --trials 6 --seed 5 --duration 30 --experiments op1 --threads 1 --json ";
+  const std::string arguments = "blindtest --trials 4 --seed 5 --duration 20 --experiments op1 --threads 1 --json ";
   const RunResult one = run_canalsim(arguments + "one.json", dir);
   ASSERT_EQ(one.code, 0) << one.err;
   const RunResult two = run_under_mpirun(arguments + "two.json", dir);
   ASSERT_EQ(two.code, 0) << two.err;
   const auto a = without_timings(nlohmann::json::parse(read_text(dir / "one.json")));
   const auto b = without_timings(nlohmann::json::parse(read_text(dir / "two.json")));
-  ASSERT_EQ(a.at("trials").size(), 6u);
+  ASSERT_EQ(a.at("trials").size(), 4u);
   EXPECT_EQ(a, b);
   // Rank 0 alone prints: one report, not two, the same but for its timings and file name.
   EXPECT_EQ(report_without_timings(two.out), report_without_timings(one.out));
