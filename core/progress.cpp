@@ -13,6 +13,14 @@ constexpr std::chrono::milliseconds kQuiet{1500};
 
 }  // namespace
 
+void ProgressCounter::finished(const std::string& label) {
+  if (!progress_) return;
+  const std::lock_guard lock(mutex_);
+  ++done_;
+  progress_({total_ > 0 ? static_cast<double>(done_) / static_cast<double>(total_) : 1.0,
+             std::to_string(done_) + "/" + std::to_string(total_) + " " + label});
+}
+
 ProgressLine::ProgressLine(std::string label)
     : label_(std::move(label)),
       tty_(::isatty(STDERR_FILENO) != 0),

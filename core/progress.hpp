@@ -22,6 +22,22 @@ struct ProgressReport {
 // several threads at once (the printer below locks).
 using ProgressCallback = std::function<void(const ProgressReport&)>;
 
+// Counts the finished items of parallel work (parallel_for, cluster::distribute) and reports
+// "DONE/TOTAL LABEL" with the share done, one report at a time whichever thread finished. Without
+// a callback it does nothing.
+class ProgressCounter {
+ public:
+  ProgressCounter(ProgressCallback progress, std::size_t total) : progress_(std::move(progress)), total_(total) {}
+  // One more item finished; `label` says what ("trials", "fits (LFOM to op1.csv)").
+  void finished(const std::string& label);
+
+ private:
+  ProgressCallback progress_;
+  std::size_t total_;
+  std::size_t done_ = 0;
+  std::mutex mutex_;
+};
+
 // A progress line on stderr, "LABEL [  3.2 s]: 42% message": on a terminal rewritten in place, the
 // first report at once and then at most 10 times a second; on a pipe or file a line once the work
 // has run 1.5 s and then every 5 s, so logs stay readable and short commands print nothing. A

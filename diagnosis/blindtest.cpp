@@ -230,16 +230,10 @@ void run_trials(const blind::TrialContext& context, std::vector<Trial>& trials, 
     trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return cluster::archive(trial);
   };
-  std::size_t finished = 0;
+  ProgressCounter progress(o.progress, trials.size());
   cluster::DistributeOptions distribution;
   distribution.threads = o.threads;
-  distribution.on_result = [&](std::size_t, const std::string&) {
-    ++finished;
-    if (o.progress) {
-      o.progress({static_cast<double>(finished) / static_cast<double>(trials.size()),
-                  std::to_string(finished) + "/" + std::to_string(trials.size()) + " trials"});
-    }
-  };
+  distribution.on_result = [&](std::size_t, const std::string&) { progress.finished("trials"); };
   const std::vector<std::string> outcomes = cluster::distribute(trials.size(), run_one, distribution);
   if (!cluster::is_root()) return;
   for (std::size_t i = 0; i < trials.size(); ++i) cluster::unarchive(outcomes[i], trials[i]);

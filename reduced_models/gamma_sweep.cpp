@@ -1,7 +1,6 @@
 // The γ grid and sweep of identification.hpp (the paper's Figures 8 and 10).
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <optional>
 #include <sstream>
 
@@ -56,8 +55,7 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
   // The grid is cut into one contiguous chunk per thread; inside a chunk each fit warm-starts
   // from its neighbour's, so the results depend on the thread count but not on scheduling.
   const std::size_t chunks = std::max<std::size_t>(1, std::min<std::size_t>(options.threads, n));
-  std::mutex progress_mutex;  // the callback is called from one thread at a time
-  std::size_t done = 0;
+  ProgressCounter progress(options.progress, n);
   parallel_for(chunks, static_cast<int>(chunks), [&](std::size_t chunk) {
     const std::size_t begin = n * chunk / chunks, end = n * (chunk + 1) / chunks;
     std::optional<Model> previous;
@@ -78,13 +76,7 @@ GammaSweep gamma_sweep(ModelKind kind, const std::vector<ExperimentData>& data,
         fits[i] = detail::refit_impl(start, detail::pointers(data), o, 0.2, 0);
       }
       previous = fits[i].model;
-      if (options.progress) {
-        std::lock_guard lock(progress_mutex);
-        ++done;
-        options.progress({static_cast<double>(done) / static_cast<double>(n),
-                          "gamma sweep " + model_name(kind) + ": " + std::to_string(done) + "/" +
-                              std::to_string(n)});
-      }
+      progress.finished("γ values of the " + model_name(kind) + " sweep");
     }
   });
   for (std::size_t i = 0; i < n; ++i) {

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <exception>
 #include <map>
-#include <mutex>
 #include <optional>
 #include <utility>
 
@@ -565,8 +564,7 @@ std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData
                                 const FitOptions& options) {
   if (const Status status = options.validate(); !status) throw InputError("fit options: " + status.message());
   std::vector<FitResult> results(data.size());
-  std::mutex progress_mutex;  // the callback is called from one thread at a time
-  std::size_t done = 0;
+  ProgressCounter progress(options.progress, data.size());
   // One report per finished fit; a single fit (one recording) reports its stages instead.
   FitOptions each = options;
   if (data.size() > 1) each.progress = nullptr;
@@ -577,13 +575,7 @@ std::vector<FitResult> fit_each(ModelKind kind, const std::vector<ExperimentData
     } catch (...) {
       error = std::current_exception();  // reported by parallel_for once every fit has run
     }
-    if (options.progress) {
-      std::lock_guard lock(progress_mutex);
-      ++done;
-      options.progress({static_cast<double>(done) / static_cast<double>(data.size()),
-                        "fitted " + model_name(kind) + " to " + data[i].source + " (" +
-                            std::to_string(done) + "/" + std::to_string(data.size()) + ")"});
-    }
+    progress.finished("fits (" + model_name(kind) + " to " + data[i].source + ")");
     if (error) std::rethrow_exception(error);
   });
   return results;

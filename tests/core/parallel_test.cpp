@@ -1,6 +1,8 @@
 #include "core/parallel.hpp"
+#include "core/progress.hpp"
 
 #include <atomic>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -50,6 +52,37 @@ TEST(ParallelFor, RethrowsTheLowestFailingIndexAfterRunningAll) {
 
 TEST(ParallelFor, NothingToDoIsNotAnError) {
   parallel_for(0, 4, [](std::size_t) { FAIL(); });
+}
+
+// The counter of finished items: every count from 1 to the total once, the share rising to 1,
+// whichever threads finish, and the callback never entered by two threads at once.
+TEST(ProgressCounter, CountsEachFinishedItemOnceFromAnyThread) {
+  std::vector<ProgressReport> reports;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  ProgressCounter counter(
+      [&](const ProgressReport& r) {
+        if (++inside > 1) overlapped = true;
+        reports.push_back(r);
+        std::this_thread::yield();
+        --inside;
+      },
+      40);
+  parallel_for(40, 4, [&](std::size_t) { counter.finished("cases"); });
+  ASSERT_EQ(reports.size(), 40u);
+  EXPECT_FALSE(overlapped);
+  std::set<std::string> messages;
+  for (std::size_t k = 0; k < reports.size(); ++k) {
+    EXPECT_DOUBLE_EQ(reports[k].fraction, static_cast<double>(k + 1) / 40.0);
+    messages.insert(reports[k].message);
+  }
+  EXPECT_EQ(reports.back().message, "40/40 cases");
+  EXPECT_EQ(messages.size(), 40u);
+}
+
+TEST(ProgressCounter, WithoutACallbackItDoesNothing) {
+  ProgressCounter counter(nullptr, 3);
+  for (int i = 0; i < 5; ++i) counter.finished("items");  // more than the total: no report, no error
 }
 
 }  // namespace
