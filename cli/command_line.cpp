@@ -124,6 +124,7 @@ void add_all_commands(CLI::App& app) {
   add_diagnose_command(app);
   add_blindtest_command(app);
   add_linearize_command(app);
+  add_sweep_command(app);
   refuse_empty_values(app);
 }
 

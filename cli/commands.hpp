@@ -18,5 +18,6 @@ void add_blindtest_command(CLI::App& app);
 void add_reproduce_command(CLI::App& app);
 void add_linearize_command(CLI::App& app);
 void add_calibrate_command(CLI::App& app);
+void add_sweep_command(CLI::App& app);
 
 }  // namespace canalsim::cli
