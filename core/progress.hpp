@@ -27,7 +27,9 @@ using ProgressCallback = std::function<void(const ProgressReport&)>;
 // a callback it does nothing.
 class ProgressCounter {
  public:
-  ProgressCounter(ProgressCallback progress, std::size_t total) : progress_(std::move(progress)), total_(total) {}
+  // `already_done`: items finished before (a resumed run), counted from there.
+  ProgressCounter(ProgressCallback progress, std::size_t total, std::size_t already_done = 0)
+      : progress_(std::move(progress)), total_(total), done_(already_done) {}
   // One more item finished; `label` says what ("trials", "fits (LFOM to op1.csv)").
   void finished(const std::string& label);
 

@@ -5,6 +5,7 @@
 
 #include "cluster/distribute.hpp"
 #include "core/errors.hpp"
+#include "core/progress.hpp"
 #include "scenarios/scenario_toml.hpp"
 #include "sweep/cases.hpp"
 #include "sweep/compute.hpp"
@@ -66,18 +67,14 @@ SweepOutputs run_sweep(const SweepFile& sweep, const SweepOptions& options) {
   const std::size_t count = case_count(sweep);
   cluster::DistributeOptions distribute;
   distribute.threads = options.threads;
-  std::size_t done = 0;
+  std::optional<ProgressCounter> progress;
   if (journal) {
     distribute.skip.assign(count, false);
     for (const auto& [index, row] : journal->finished()) distribute.skip[index] = true;
-    done = journal->finished().size();
+    progress.emplace(options.progress, count, journal->finished().size());
     distribute.on_result = [&](std::size_t, const std::string& row) {
       journal->append(row);
-      ++done;
-      if (options.progress) {
-        options.progress({static_cast<double>(done) / static_cast<double>(count),
-                          "case " + std::to_string(done) + "/" + std::to_string(count)});
-      }
+      progress->finished("cases");
     };
   }
   std::vector<std::string> computed =

@@ -168,7 +168,7 @@ TEST(SweepRun, AJournalCutAfterSomeRowsIsCompletedIntoTheSameTableByteForByte) {
   int reports = 0;
   options.progress = [&reports](const ProgressReport& r) {
     ++reports;
-    EXPECT_EQ(r.message, "case " + std::to_string(2 + reports) + "/4");
+    EXPECT_EQ(r.message, std::to_string(2 + reports) + "/4 cases");
   };
   const SweepOutputs outputs = run_sweep(f, options);
   EXPECT_EQ(outputs.resumed, 2u);
