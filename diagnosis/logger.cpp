@@ -1,11 +1,15 @@
 // The blind test's logger (blindtest.hpp as_logged): what instruments with concealed faults write
 // of an experiment simulated with ideal sensors. It realises the catalog's sensor model
 // (catalog.hpp: each row's edit of a SensorModel, its command map) with its own arithmetic, not
-// with the diagnosis' observe(): a level's delay is read by cubic interpolation, a lattice sits at a
-// random offset, and noise enters before the reading is rounded.
+// with the diagnosis' observe(): a level's delay is read by cubic interpolation, a coarse instrument's
+// lattice sits at an offset of its own (the same in each recording it writes), and noise enters
+// before the reading is rounded.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <functional>
 #include <random>
+#include <string>
 
 #include "diagnosis/blindtest.hpp"
 #include "scenarios/outside_catalog.hpp"
@@ -54,6 +58,14 @@ double logged_command(const Effect& effect, double parameter, double opening, do
   return (opening - at_zero) / slope;
 }
 
+// Where a coarse instrument's lattice lies: its own, the same in every recording it writes (the
+// instrument's zero, not the recording's), and anywhere within one step. Drawn from the fault
+// itself — the channel and the step — so that all the recordings of one trial share it.
+double lattice_origin(const std::string& channel, double step_mm) {
+  std::mt19937_64 rng(std::hash<std::string>{}(channel) ^ std::bit_cast<std::uint64_t>(step_mm));
+  return step_mm * std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+}
+
 }  // namespace
 
 Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& concealed, const Logger& logger) {
@@ -70,7 +82,6 @@ Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& 
   const double period = t.size() > 1 ? t[1] - t[0] : 1.0;
   std::mt19937_64 rng(logger.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
   Recording out = ideal;
   for (std::size_t c = 0; c < out.names.size(); ++c) {
     const std::string& name = out.names[c];
@@ -90,7 +101,7 @@ Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& 
     const calibration::ChannelFault fault = found == faults.channel_fault.end() ? calibration::ChannelFault{} : found->second;
     const std::vector<double> level = delayed(v, (faults.clock_delay_s + faults.delay_s + fault.delay_s) / period, cubic_at);
     const double r = fault.resolution_mm >= 0.0 ? fault.resolution_mm : logger.resolution_mm;
-    const double lattice = fault.resolution_mm >= 0.0 ? r * unit(rng) : 0.0;
+    const double lattice = fault.resolution_mm >= 0.0 ? lattice_origin(name, r) : 0.0;
     for (std::size_t k = 0; k < v.size(); ++k) {
       const double read = fault.gain * level[k] + faults.offset_mm + fault.offset_mm +
                           fault.drift_mm_per_min * (t[k] - t.front()) / 60.0 + logger.noise_std_mm * noise(rng);

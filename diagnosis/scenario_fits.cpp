@@ -59,6 +59,22 @@ double refine_lattice(const std::vector<const std::vector<double>*>& series, dou
   return r;
 }
 
+// How closely the levels of the series that span at least `min_steps` steps of r sit on a
+// lattice of step r: |mean exp(2πi y/r)| over them, 1 on the lattice; negative when no series
+// spans that far.
+double lattice_coherence(const std::vector<const std::vector<double>*>& series, double r, double min_steps) {
+  double coherent = 0.0, total = 0.0;
+  for (const auto* y : series) {
+    const auto [lo, hi] = std::minmax_element(y->begin(), y->end());
+    if (*hi - *lo < min_steps * r) continue;
+    std::complex<double> sum = 0.0;
+    for (double v : *y) sum += std::polar(1.0, 2.0 * std::numbers::pi * v / r);
+    coherent += std::abs(sum);
+    total += static_cast<double>(y->size());
+  }
+  return total > 0.0 ? coherent / total : -1.0;
+}
+
 }  // namespace
 
 // Gauss–Newton with a secant Jacobian on the weighted residual vector: each step solves the
@@ -167,17 +183,18 @@ double Engine::lattice_resolution(const std::vector<std::string>& channels) cons
   }
   std::vector<const std::vector<double>*> series;
   for (const auto& d : diffs) series.push_back(&d);
-  for (double r = kind_named("sensor_quantization")->theta_high; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
-    double coherent = 0.0, total = 0.0;
-    for (const auto* y : series) {
-      const auto [lo, hi] = std::minmax_element(y->begin(), y->end());
-      if (*hi - *lo < 6.0 * r) continue;
-      std::complex<double> s = 0.0;
-      for (double v : *y) s += std::polar(1.0, 2.0 * std::numbers::pi * v / r);
-      coherent += std::abs(s);
-      total += static_cast<double>(y->size());
+  const double largest = kind_named("sensor_quantization")->theta_high;
+  for (double r = largest; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
+    if (lattice_coherence(series, r, 6.0) <= 0.9) continue;
+    // A lattice holds its submultiples too: a channel that moves by fewer than six steps of its
+    // own lattice (an upstream level that hardly moves) is first seen on r/2 or r/3. The lattice is
+    // the largest multiple of r the levels still sit on, over at least two of its steps.
+    const double found = refine_lattice(series, r);
+    double lattice = found;
+    for (int m = 2; m * found <= largest; ++m) {
+      if (lattice_coherence(series, m * found, 2.0) > 0.9) lattice = m * found;
     }
-    if (total > 0.0 && coherent / total > 0.9) return refine_lattice(series, r);
+    return lattice == found ? found : refine_lattice(series, lattice);
   }
   return sensors_.resolution_mm;
 }

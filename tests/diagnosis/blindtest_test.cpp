@@ -66,6 +66,14 @@ TEST(Blindtest, TheLoggerFaultsOneChannelInItsClosedForm) {
   const double lattice = std::fmod(late.column("y_up_mm")[0], 0.4);
   for (double v : late.column("y_up_mm")) EXPECT_NEAR(std::remainder(v - lattice, 0.4), 0.0, 1e-9);
   for (double v : late.column("y_dwe_mm")) EXPECT_NEAR(std::remainder(v, 0.05), 0.0, 1e-9);
+  // The lattice is the instrument's: another recording it writes (another logger seed, another
+  // experiment) sits on the same one.
+  Recording other_experiment = ideal;
+  std::vector<double> higher = up;
+  for (double& v : higher) v += 0.137;
+  other_experiment.set_column("y_up_mm", higher);
+  const Recording later = as_logged(other_experiment, {{"sensor_quantization[y_up_mm]", 0.4}}, {0.0, 0.05, 4});
+  for (double v : later.column("y_up_mm")) EXPECT_NEAR(std::remainder(v - lattice, 0.4), 0.0, 1e-9);
 }
 
 TEST(Blindtest, OnlyHydraulicEffectsAreConcealedInTheScenario) {

@@ -101,6 +101,18 @@ TEST(Diagnose, RecoversSensorDelay) { expect_recovered({"command_delay", 1.0, {"
 // Levels that lead the command (loggers on two clocks): a negative delay.
 TEST(Diagnose, RecoversLevelsThatLeadTheCommand) { expect_recovered({"command_delay", -0.5, {"gate_rate_limit", "friction"}}); }
 TEST(Diagnose, RecoversSensorQuantization) { expect_recovered({"sensor_quantization[y_dwe_mm]", 0.5, {"level_datum"}}); }
+// The upstream level moves by a few steps of a coarse sensor's lattice only: its half and third
+// hold the readings too, and the lattice is the largest step they sit on.
+TEST(Diagnose, ACoarseSensorOnALevelThatHardlyMovesIsNamedWithItsOwnStep) {
+  const std::string effect = "sensor_quantization[y_up_mm]";
+  const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), simulate_lab({effect, 0.6}),
+                               fast_options({effect, "sensor_offset[y_up_mm]"}));
+  ASSERT_TRUE(d.ok) << d.message;
+  EXPECT_EQ(d.verdict, effect) << d.reason;
+  const EffectResult* e = find(d, effect);
+  ASSERT_NE(e, nullptr);
+  EXPECT_NEAR(e->parameter.value, 0.6, 0.006);
+}
 TEST(Diagnose, RecoversGateRateLimit) { expect_recovered({"gate_rate_limit", 8.0, {"command_delay"}}); }
 TEST(Diagnose, RecoversGateLeakage) { expect_recovered({"gate_leakage", 2.0, {"discharge_coefficient"}}); }
 TEST(Diagnose, RecoversDischargeCoefficient) { expect_recovered({"discharge_coefficient", 0.85, {"gate_leakage"}}); }
