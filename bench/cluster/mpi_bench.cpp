@@ -5,12 +5,13 @@
 // rank 0's collection of the results are in them.
 #include <benchmark/benchmark.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
 
 #include <unistd.h>
+
+#include "testing/paired_timing.hpp"
 
 namespace {
 
@@ -23,33 +24,19 @@ std::string mpirun_two() {
   return command + " " + CANALSIM_PROGRAM + kBlindtest + " --threads 1";
 }
 
-double seconds_of(const std::string& command) {
-  const auto start = std::chrono::steady_clock::now();
-  if (std::system(command.c_str()) != 0) throw std::runtime_error("failed: " + command);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // Argument: the threads of the single process (1: the same cores as the job's ranks use, one each;
 // 2: the threads canalsim uses by default on this machine).
 void BM_BlindtestTwoProcessesAgainstOne(benchmark::State& state) {
   const std::string one_process = std::string(CANALSIM_PROGRAM) + kBlindtest + " --threads " + std::to_string(state.range(0));
   const std::string two_processes = mpirun_two();
-  double one_seconds = 0.0, two_seconds = 0.0;
-  bool one_first = true;
-  for (auto _ : state) {
-    if (one_first) {
-      one_seconds += seconds_of(one_process);
-      two_seconds += seconds_of(two_processes);
-    } else {
-      two_seconds += seconds_of(two_processes);
-      one_seconds += seconds_of(one_process);
-    }
-    one_first = !one_first;
-  }
-  const double runs = static_cast<double>(state.iterations());
-  state.counters["one_process_s"] = one_seconds / runs;
-  state.counters["two_processes_s"] = two_seconds / runs;
-  state.counters["speedup"] = one_seconds / two_seconds;
+  const auto run = [](const std::string& command) {
+    if (std::system(command.c_str()) != 0) throw std::runtime_error("failed: " + command);
+  };
+  const canalsim::testing::PairedSeconds seconds = canalsim::testing::time_in_alternating_pairs(
+      state, [&] { run(one_process); }, [&] { run(two_processes); });
+  state.counters["one_process_s"] = seconds.first;
+  state.counters["two_processes_s"] = seconds.second;
+  state.counters["speedup"] = seconds.first / seconds.second;
 }
 
 }  // namespace

@@ -8,10 +8,9 @@
 #include <benchmark/benchmark.h>
 #include <pybind11/embed.h>
 
-#include <chrono>
-
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
+#include "testing/paired_timing.hpp"
 
 namespace py = pybind11;
 
@@ -27,13 +26,6 @@ py::module_& canalsim_package() {
   return package;
 }
 
-template <class Call>
-double seconds_of(const Call& call) {
-  const auto start = std::chrono::steady_clock::now();
-  call();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 void simulate_from_the_library() {
   const auto lab = canalsim::scenarios::load_scenario_or_builtin("lab");
   benchmark::DoNotOptimize(canalsim::scenarios::simulate(lab, *lab.find_experiment("op1")));
@@ -44,10 +36,10 @@ enum class PythonLayer { package = 0, compiled_module = 1 };
 // Argument: the PythonLayer timed against the library. Counters: the two means per call and the
 // overhead in %.
 void BM_PythonOverLibraryInPairs(benchmark::State& state) {
-  py::module_& canalsim = canalsim_package();
-  const py::object package_simulate = canalsim.attr("simulate");
-  const py::object module_simulate = canalsim.attr("_canalsim").attr("simulate");
-  const py::object lab_text = canalsim.attr("_canalsim").attr("scenario_text")("lab");
+  py::module_& package = canalsim_package();
+  const py::object package_simulate = package.attr("simulate");
+  const py::object module_simulate = package.attr("_canalsim").attr("simulate");
+  const py::object lab_text = package.attr("_canalsim").attr("scenario_text")("lab");
   const auto layer = static_cast<PythonLayer>(state.range(0));
   const auto simulate_from_python = [&] {
     if (layer == PythonLayer::package) {
@@ -57,23 +49,11 @@ void BM_PythonOverLibraryInPairs(benchmark::State& state) {
     }
   };
 
-  double library_seconds = 0.0;
-  double python_seconds = 0.0;
-  bool library_first = true;
-  for (auto _ : state) {
-    if (library_first) {
-      library_seconds += seconds_of(simulate_from_the_library);
-      python_seconds += seconds_of(simulate_from_python);
-    } else {
-      python_seconds += seconds_of(simulate_from_python);
-      library_seconds += seconds_of(simulate_from_the_library);
-    }
-    library_first = !library_first;
-  }
-  const double calls = static_cast<double>(state.iterations());
-  state.counters["library_ms"] = 1e3 * library_seconds / calls;
-  state.counters["python_ms"] = 1e3 * python_seconds / calls;
-  state.counters["overhead_pct"] = 100.0 * (python_seconds / library_seconds - 1.0);
+  const canalsim::testing::PairedSeconds seconds =
+      canalsim::testing::time_in_alternating_pairs(state, simulate_from_the_library, simulate_from_python);
+  state.counters["library_ms"] = 1e3 * seconds.first;
+  state.counters["python_ms"] = 1e3 * seconds.second;
+  state.counters["overhead_pct"] = 100.0 * (seconds.second / seconds.first - 1.0);
 }
 
 }  // namespace
