@@ -15,11 +15,15 @@
 namespace canalsim {
 namespace {
 
+// The comma-separated fields of a line, trimmed; a trailing comma ends with an empty field.
 std::vector<std::string> split_csv_line(const std::string& line) {
   std::vector<std::string> fields;
-  std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, ',')) fields.push_back(trim(field));
+  std::size_t begin = 0;
+  while (begin < line.size()) {
+    const std::size_t comma = std::min(line.find(',', begin), line.size());
+    fields.push_back(trim(line.substr(begin, comma - begin)));
+    begin = comma + 1;
+  }
   if (!line.empty() && line.back() == ',') fields.emplace_back();
   return fields;
 }

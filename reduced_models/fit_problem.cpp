@@ -66,57 +66,13 @@ double Problem::cost(Model& m) {
     }
     return total;
   }
-  Model unit = m;
-  unit.p.K = 1.0;
-  unit.actuation.quantum_mm = 0.0;
-  std::vector<std::vector<double>> g(data_.size());
+  std::vector<std::vector<double>> g;
+  unit_responses(m, g);
+  if (least_squares_) return least_squares_cost(m, g);
   values_.clear();
   weights_.clear();
-  // Linear time-invariant models: a whole-sample delay commutes with the simulation and a
-  // fractional one is a blend of two whole-sample delays (delay_interpolation_weight), so the
-  // undelayed unit responses of the last few (T, λ, T2) are cached and only re-delayed when
-  // just L changes (as in BOBYQA's initial design and line steps along L). SOPD's exact ZOH
-  // delay is no such blend: it is simulated every time (O(n)).
-  const bool lti = is_linear_time_invariant(kind_) && kind_ != ModelKind::sopd;
-  const std::vector<std::vector<double>>* undelayed_responses = nullptr;
-  if (lti) {
-    const std::array<double, 4> key{m.p.T, m.p.lambda, m.p.T2, m.p.Tz};
-    for (auto& entry : cache_) {
-      if (entry.key == key) {
-        entry.last_use = ++cache_clock_;
-        undelayed_responses = &entry.responses;
-      }
-    }
-    if (!undelayed_responses) {
-      if (cache_.size() < kCacheEntries) cache_.emplace_back();
-      auto& entry = *std::min_element(cache_.begin(), cache_.end(),
-                                      [](const CacheEntry& a, const CacheEntry& b) {
-                                        return a.last_use < b.last_use;
-                                      });
-      Model undelayed = unit;
-      undelayed.p.L = 0.0;
-      entry.key = key;
-      entry.last_use = ++cache_clock_;
-      entry.responses.resize(data_.size());
-      for (std::size_t j = 0; j < data_.size(); ++j) {
-        entry.responses[j] = simulate(undelayed, *data_[j], options_.simulation).y_dwe_mm;
-        ++simulations_;
-        for (double& v : entry.responses[j]) v -= data_[j]->y0_mm;
-      }
-      undelayed_responses = &entry.responses;
-    }
-  }
   for (std::size_t j = 0; j < data_.size(); ++j) {
     const auto& d = *data_[j];
-    if (lti) {
-      const double delay = m.p.L / d.h, frac = delay - std::floor(delay);
-      blended_delay((*undelayed_responses)[j], delay, *delay_interpolation_weight(unit, d.h, frac), g[j]);
-    } else {
-      g[j] = simulate(unit, d, options_.simulation).y_dwe_mm;
-      ++simulations_;
-      for (double& v : g[j]) v -= d.y0_mm;
-    }
-    if (least_squares_) continue;
     for (std::size_t k = 0; k < d.size(); ++k) {
       if (g[j][k] != 0.0) {
         values_.push_back(residual_[j][k] / g[j][k]);
@@ -124,7 +80,6 @@ double Problem::cost(Model& m) {
       }
     }
   }
-  if (least_squares_) return least_squares_cost(m, g);
   const auto& spec = options_.bounds.K;
   const double K = values_.empty() ? 0.0 : weighted_median(values_, weights_);
   m.p.K = std::clamp(K, spec.lower, spec.upper);
@@ -141,14 +96,73 @@ double Problem::cost(Model& m) {
   return total;
 }
 
+void Problem::unit_responses(const Model& m, std::vector<std::vector<double>>& g) {
+  Model unit = m;
+  unit.p.K = 1.0;
+  unit.actuation.quantum_mm = 0.0;
+  g.resize(data_.size());
+  // Linear time-invariant models: a whole-sample delay commutes with the simulation and a
+  // fractional one is a blend of two whole-sample delays (delay_interpolation_weight), so the
+  // undelayed unit responses of the last few (T, λ, T2) are cached and only re-delayed when
+  // just L changes (as in BOBYQA's initial design, line steps along L and the polish's
+  // difference in L). SOPD's exact ZOH delay is no such blend: it is simulated every time (O(n)).
+  const bool lti = is_linear_time_invariant(kind_) && kind_ != ModelKind::sopd;
+  if (!lti) {
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      g[j] = simulate(unit, *data_[j], options_.simulation).y_dwe_mm;
+      ++simulations_;
+      for (double& v : g[j]) v -= data_[j]->y0_mm;
+    }
+    return;
+  }
+  const auto& undelayed = undelayed_unit_responses(unit);
+  for (std::size_t j = 0; j < data_.size(); ++j) {
+    const auto& d = *data_[j];
+    const double delay = m.p.L / d.h, frac = delay - std::floor(delay);
+    blended_delay(undelayed[j], delay, *delay_interpolation_weight(unit, d.h, frac), g[j]);
+  }
+}
+
+const std::vector<std::vector<double>>& Problem::undelayed_unit_responses(const Model& unit) {
+  const std::array<double, 4> key{unit.p.T, unit.p.lambda, unit.p.T2, unit.p.Tz};
+  for (auto& entry : cache_) {
+    if (entry.key == key) {
+      entry.last_use = ++cache_clock_;
+      return entry.responses;
+    }
+  }
+  if (cache_.size() < kCacheEntries) cache_.emplace_back();
+  auto& entry = *std::min_element(cache_.begin(), cache_.end(), [](const CacheEntry& a, const CacheEntry& b) {
+    return a.last_use < b.last_use;
+  });
+  Model undelayed = unit;
+  undelayed.p.L = 0.0;
+  entry.key = key;
+  entry.last_use = ++cache_clock_;
+  entry.responses.resize(data_.size());
+  for (std::size_t j = 0; j < data_.size(); ++j) {
+    entry.responses[j] = simulate(undelayed, *data_[j], options_.simulation).y_dwe_mm;
+    ++simulations_;
+    for (double& v : entry.responses[j]) v -= data_[j]->y0_mm;
+  }
+  return entry.responses;
+}
+
 void Problem::use_least_squares() {
   if (!profile_K_) throw std::logic_error("least squares: only for models linear in K");
   least_squares_ = true;
 }
 
+double Problem::least_squares_cost(Model& m, const std::vector<std::vector<double>>& g) {
+  linear_gain_and_offsets(m, g);
+  const bool reading = bias_.lattice().step > 0.0 && m.actuation.quantum_mm == 0.0;
+  if (reading) gauss_newton_gain_and_offsets(m, g);
+  return squared_error(m, g);
+}
+
 // min over K and c_j of Σ_j h_j Σ_k (r_jk − c_j − K g_jk)²: c_j = mean_j(r − K g) and K from the
 // centred sums, K = Σ_j h_j Σ (r − r̄_j)(g − ḡ_j) / Σ_j h_j Σ (g − ḡ_j)², clipped to its bounds.
-double Problem::least_squares_cost(Model& m, const std::vector<std::vector<double>>& g) {
+void Problem::linear_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g) {
   double cross = 0.0, energy = 0.0;
   std::vector<double> mean_r(data_.size()), mean_g(data_.size());
   for (std::size_t j = 0; j < data_.size(); ++j) {
@@ -168,11 +182,13 @@ double Problem::least_squares_cost(Model& m, const std::vector<std::vector<doubl
   }
   const auto& spec = options_.bounds.K;
   m.p.K = std::clamp(energy > 0.0 ? cross / energy : 0.0, spec.lower, spec.upper);
-  const double r = m.actuation.quantum_mm;
   offsets_.assign(data_.size(), 0.0);
   for (std::size_t j = 0; j < data_.size(); ++j) offsets_[j] = mean_r[j] - m.p.K * mean_g[j];
-  const bool reading = bias_.lattice.step > 0.0 && r == 0.0;
-  if (reading) gauss_newton_gain_and_offsets(m, g);
+}
+
+double Problem::squared_error(const Model& m, const std::vector<std::vector<double>>& g) const {
+  const double r = m.actuation.quantum_mm;
+  const bool reading = bias_.lattice().step > 0.0 && r == 0.0;
   double total = 0.0, slope = 0.0;
   for (std::size_t j = 0; j < data_.size(); ++j) {
     const auto& d = *data_[j];

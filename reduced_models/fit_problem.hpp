@@ -54,6 +54,23 @@ class Problem {
   // instead of the level itself; K and c_j by three Gauss–Newton steps from the linear solution.
   void use_reading_bias(const ReadingBias& bias) { bias_ = bias; }
 
+  // The unit-gain responses g_j of `m` (K = 1, no output quantiser; the deviation from each
+  // recording's y0, delayed by m.p.L), one per recording.
+  void unit_responses(const Model& m, std::vector<std::vector<double>>& g);
+
+  // h Σ (reading − y)² of unit responses `g` (unit_responses) at m.p.K and the offsets of the
+  // last least-squares evaluation: the sensor's mean reading if one is set, else the level.
+  double squared_error(const Model& m, const std::vector<std::vector<double>>& g) const;
+
+  // The least-squares polish (least_squares_polish.cpp): Levenberg–Marquardt from `start` on
+  // the least-squares cost (with the sensor's mean reading if one is set), every free parameter
+  // with L inside ±`bracket_s` of start.p.L, K and the output offsets moved with them. Returns
+  // the optimum with K set (offsets() holds the offsets); `cost` as cost() gives it. `precise`:
+  // stop at a relative cost change of 1e-12 (the answer), else of 1e-6 (a start for another
+  // polish). Models linear in K whose output is not quantised (actuation.quantum_mm = 0) only.
+  Model least_squares_polish(const Model& start, double bracket_s, bool precise, double& best_cost, bool& converged,
+                             std::string& message);
+
   // Stage 1 for a linear model (delay_search.cpp): the cost profiled over every whole-sample
   // delay on a grid of dynamics; returns the best (K, T, λ, T2, L) as the start of refine().
   Model delay_search();
@@ -72,6 +89,7 @@ class Problem {
                double step_scale = 1.0, int restarts = -1, double bracket_s = 0.0);
 
  private:
+  const std::vector<std::vector<double>>& undelayed_unit_responses(const Model& unit);
   Model run_nlopt(const Model& start, double L_lo, double L_hi, bool alternate, double& best_cost,
                   bool& converged, std::string& message);
 
@@ -97,9 +115,17 @@ class Problem {
   bool least_squares_ = false;
   std::vector<double> offsets_;
   ReadingBias bias_;
-  void gauss_newton_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g);
+  // The least-squares cost of `m` with K and the offsets profiled: in closed form for the level,
+  // then Gauss–Newton for the sensor's mean reading.
   double least_squares_cost(Model& m, const std::vector<std::vector<double>>& g);
+  void linear_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g);
+  void gauss_newton_gain_and_offsets(Model& m, const std::vector<std::vector<double>>& g);
+
 };
+
+// The scale of a parameter's finite-difference step: its magnitude, or a floor where it may be 0 —
+// a sample period `h` for the times, 0.01 for the orders and exponents, 1e-3 for the gains.
+double difference_scale(const std::string& name, double value, double h);
 
 // Throws InputError when the recordings or the options cannot be fitted (no recording, invalid
 // options, missing y_up, a delay bound as long as a recording).

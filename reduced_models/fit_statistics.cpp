@@ -43,13 +43,9 @@ std::vector<std::string> fitted_names(ModelKind kind, const FitOptions& options)
   return out;
 }
 
-// Central-difference step: 1e-4 of the value, or of a floor where the value may be 0 (a sample
-// period for the times, 0.01 for the orders and exponents, 1e-3 for the gains).
+// Central-difference step: 1e-4 of the parameter's scale.
 double difference_step(const std::string& name, double value, double h) {
-  const bool time = name == "T" || name == "T2" || name == "Tz" || name == "L";
-  const bool gain = name == "K" || name == "K_sub";
-  const double floor = time ? h : gain ? 1e-3 : 0.01;
-  return 1e-4 * std::max(std::abs(value), floor);
+  return 1e-4 * difference_scale(name, value, h);
 }
 
 // The recording sampled `divisor` times as often, each sample held over its sub-steps: the same
@@ -77,7 +73,7 @@ class MeanOutput {
  public:
   MeanOutput(const std::vector<const ExperimentData*>& data, const FitResult& r, const FitOptions& options,
              const ReadingBias* bias)
-      : data_(data), y0_(r.y0_mm), simulation_(options.simulation), bias_(bias && bias->lattice.step > 0.0 ? bias : nullptr) {}
+      : data_(data), y0_(r.y0_mm), simulation_(options.simulation), bias_(bias && bias->lattice().step > 0.0 ? bias : nullptr) {}
 
   // The model's level on every recording, one after another (the rows of the Jacobian).
   // The simulation takes the recording's own y0; the fit's operating point shifts the output,
@@ -97,17 +93,21 @@ class MeanOutput {
 
   // The model's level as output() gives it, computed at 1/`divisor` of the recordings' time step
   // and read at their sample times: the command held over the sub-steps, the short memory that
-  // many times the terms (the same memory in time).
-  std::vector<double> at_finer_step(const Model& model, std::size_t divisor) const {
+  // many times the terms (the same memory in time). With `leading`, on each recording's first
+  // `leading` samples only (the simulation is causal: the same levels there).
+  std::vector<double> at_finer_step(const Model& model, std::size_t divisor,
+                                    std::size_t leading = std::numeric_limits<std::size_t>::max()) const {
     Model level = model;
     level.actuation.quantum_mm = 0.0;
     SimulationOptions finer = simulation_;
     finer.gl.memory_terms *= divisor;
     std::vector<double> out;
     for (std::size_t j = 0; j < data_.size(); ++j) {
-      const auto y = simulate(level, finer_step(*data_[j], divisor), finer).y_dwe_mm;
+      const std::size_t rows = std::min(leading, data_[j]->size());
+      const ExperimentData segment = rows < data_[j]->size() ? leading_samples(*data_[j], rows) : *data_[j];
+      const auto y = simulate(level, finer_step(segment, divisor), finer).y_dwe_mm;
       const double shift = j < y0_.size() ? y0_[j] - data_[j]->y0_mm : 0.0;
-      for (std::size_t k = 0; k < data_[j]->size(); ++k) out.push_back(y[divisor * k] + shift);
+      for (std::size_t k = 0; k < rows; ++k) out.push_back(y[divisor * k] + shift);
     }
     return out;
   }
@@ -227,26 +227,45 @@ void write_statistics(FitResult& r, const std::vector<std::string>& names, const
 // The numerical part of each fitted parameter's std: |δ| 2^p / (2^p − 1), δ the shift of the
 // optimum were the model computed at half the time step, p the order observed from h/2 to h/4
 // (within [λ-like 0.25, 2]; the header's Richardson argument). All zero when halving the step
-// changes nothing (an exact simulation).
+// changes nothing (an exact simulation). The order is a property of the scheme and of how the
+// command switches, not of the record's length: it is observed on each recording's first
+// kOrderSamples samples, where the quarter step costs a sixteenth of a long record's.
+constexpr std::size_t kOrderSamples = 2048;
+
 std::vector<double> numerical_deviations(const MeanOutput& output, const Model& model, const std::vector<double>& J,
                                          std::size_t columns, const std::vector<double>& mean,
                                          const std::vector<const ExperimentData*>& data) {
   const std::vector<double> half = output.readings(output.at_finer_step(model, 2));
   std::vector<double> change(mean.size());
-  double first = 0.0;  // |y(h/2) − y(h)|²
+  double first = 0.0;          // |y(h/2) − y(h)|²
+  double first_leading = 0.0;  // the same on the leading samples
+  std::vector<double> half_leading;
   std::size_t row = 0;
   for (const ExperimentData* d : data) {
     for (std::size_t k = 0; k < d->size(); ++k, ++row) {
       change[row] = std::sqrt(d->h) * (half[row] - mean[row]);
-      first += (half[row] - mean[row]) * (half[row] - mean[row]);
+      const double squared = (half[row] - mean[row]) * (half[row] - mean[row]);
+      first += squared;
+      if (k < kOrderSamples) {
+        first_leading += squared;
+        half_leading.push_back(half[row]);
+      }
     }
   }
   std::vector<double> deviation(columns, 0.0);
   if (!(first > 0.0)) return deviation;
-  const std::vector<double> quarter = output.readings(output.at_finer_step(model, 4));
-  double second = 0.0;  // |y(h/4) − y(h/2)|²
-  for (std::size_t i = 0; i < half.size(); ++i) second += (quarter[i] - half[i]) * (quarter[i] - half[i]);
-  const double order = second > 0.0 ? std::clamp(0.5 * std::log2(first / second), 0.25, 2.0) : 2.0;
+  // Leading samples where the step changes nothing (the command has not moved yet): the whole.
+  if (!(first_leading > 0.0)) {
+    first_leading = first;
+    half_leading = half;
+  }
+  const std::size_t leading = half_leading.size() < half.size() ? kOrderSamples : half.size();
+  const std::vector<double> quarter = output.readings(output.at_finer_step(model, 4, leading));
+  double second = 0.0;  // |y(h/4) − y(h/2)|² on the leading samples
+  for (std::size_t i = 0; i < quarter.size(); ++i) {
+    second += (quarter[i] - half_leading[i]) * (quarter[i] - half_leading[i]);
+  }
+  const double order = second > 0.0 ? std::clamp(0.5 * std::log2(first_leading / second), 0.25, 2.0) : 2.0;
   const double to_converged = std::pow(2.0, order) / (std::pow(2.0, order) - 1.0);
   deviation = optimum_shift(J, change, columns);
   for (double& v : deviation) v = to_converged * std::abs(v);
@@ -279,6 +298,12 @@ void statistics_of(FitResult& r, const std::vector<const ExperimentData*>& data,
 }
 
 }  // namespace
+
+double difference_scale(const std::string& name, double value, double h) {
+  const bool time = name == "T" || name == "T2" || name == "Tz" || name == "L";
+  const bool gain = name == "K" || name == "K_sub";
+  return std::max(std::abs(value), time ? h : gain ? 1e-3 : 0.01);
+}
 
 void add_fit_statistics(FitResult& r, const std::vector<const ExperimentData*>& data, const FitOptions& options,
                         bool offsets_fitted, const ReadingBias* bias) {

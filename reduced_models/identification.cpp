@@ -195,7 +195,9 @@ class FitSession {
     Model model = searched.model;
     bool converged = searched.converged;
     std::string message = searched.message;
-    if (!search_copies_.empty()) {
+    // A search on a copy is refined on the whole record by its own criterion, unless the
+    // Gauss–Newton polish follows: it starts as well from the search's model.
+    if (!search_copies_.empty() && !polished_by_gauss_newton(kind)) {
       stage(kind, "refining on the whole record");
       Problem whole(kind, data_, options_);
       double cost = 0.0;
@@ -240,6 +242,11 @@ class FitSession {
   bool polished_by_least_squares(ModelKind kind) const {
     return options_.criterion == Criterion::least_squares && output_linear_in_gain(kind) && !options_.bounds.K.fixed;
   }
+  // The least-squares polish runs Levenberg–Marquardt (least_squares_polish.cpp) unless the
+  // model quantises its output (eq. 17), whose cost has no derivative: NLopt polishes that.
+  bool polished_by_gauss_newton(ModelKind kind) const {
+    return polished_by_least_squares(kind) && options_.actuation.quantum_mm == 0.0;
+  }
 
   struct Searched {
     Model model;
@@ -264,7 +271,9 @@ class FitSession {
       const Model start = problem.delay_search();
       const char* scale = dynamics_parameter(kind);
       const double T = scale ? get_parameter(start.p, scale) : 0.0;
-      best.model = problem.refine(start, best.cost, best.converged, best.message, 1.0, -1,
+      // No restart when the Gauss–Newton polish continues from here.
+      best.model = problem.refine(start, best.cost, best.converged, best.message, 1.0,
+                                  polished_by_gauss_newton(kind) ? 0 : -1,
                                   std::max(0.1 * T, 2.0 * search_data_.front()->h));
     } else {
       const Model start = nonlinear_start(problem, search(linear).model);
@@ -315,52 +324,71 @@ class FitSession {
     return start;
   }
 
-  // The least-squares polish (Criterion::least_squares) of an IAE fit on the recordings: one
-  // local run with K and the output offsets profiled out, L within ±max(2 samples, T/10).
+  // The least-squares polish (Criterion::least_squares) of an IAE fit on the recordings: a local
+  // run with K and the output offsets fitted with the other parameters, L within
+  // ±max(2 samples, T/10), on a quantising sensor's mean reading where that matters.
   FitResult polish_least_squares(ModelKind kind, const Model& start, bool converged,
                                  const std::string& message) {
-    // Tolerances far below the default: the cost is the noise floor n σ² plus the misfit, and
-    // what separates the optimum from its neighbourhood is a change of about σ², a relative
-    // 1/n (1e-5 for 10⁵ samples) that ftol_rel = 1e-4 would stop short of (measured: the delay
-    // of a T = 60 s pool at 100 Hz twice as scattered as the Cramér–Rao bound).
+    // NLopt's tolerances far below the default: the cost is the noise floor n σ² plus the
+    // misfit, and what separates the optimum from its neighbourhood is a change of about σ², a
+    // relative 1/n (1e-5 for 10⁵ samples) that ftol_rel = 1e-4 would stop short of (measured:
+    // the delay of a T = 60 s pool at 100 Hz twice as scattered as the Cramér–Rao bound).
     FitOptions polish = options_;
     polish.relative_tolerance = 1e-10;
     Problem problem(kind, data_, polish);
     problem.use_least_squares();
     const char* scale = dynamics_parameter(kind);
     const double T = scale ? get_parameter(start.p, scale) : 0.0;
+    const double bracket = std::max(0.1 * T, 2.0 * data_.front()->h);
     double cost = 0.0;
     std::string polish_message;
     bool polish_converged = true;
-    const double bracket = std::max(0.1 * T, 2.0 * data_.front()->h);
-    Model best = problem.refine(start, cost, polish_converged, polish_message, 0.3, 1, bracket);
-    // A quantising sensor: fit its mean reading (sensor_reading.hpp), with the noise σ that
-    // fits best at this optimum (the first polish of the session sets it for all).
-    if (!reading_bias_) reading_bias_ = best_reading_bias(kind, best);
-    if (reading_bias_->lattice.step > 0.0) {
-      problem.use_reading_bias(*reading_bias_);
-      best = problem.refine(best, cost, polish_converged, polish_message, 0.1, 1, bracket);
+    auto run = [&](const Model& from, double step_scale, bool precise) {
+      return polished_by_gauss_newton(kind)
+                 ? problem.least_squares_polish(from, bracket, precise, cost, polish_converged, polish_message)
+                 : problem.refine(from, cost, polish_converged, polish_message, step_scale, 1, bracket);
+    };
+    // A quantising sensor: fit its mean reading (sensor_reading.hpp), with the noise σ that fits
+    // best at the levels' optimum. The first polish of the session finds that optimum and sets
+    // the sensor for all (a rough optimum where a sensor's lattice will be polished on again);
+    // the others fit the mean reading from the start.
+    const bool sensor_known = reading_bias_.has_value();
+    if (sensor_known && reading_bias_->lattice().step > 0.0) problem.use_reading_bias(*reading_bias_);
+    const bool rough = !sensor_known && recorded_lattice(data_).step > 0.0;
+    Model best = run(start, 0.3, !rough);
+    if (!sensor_known) {
+      reading_bias_ = best_reading_bias(kind, best);
+      if (reading_bias_->lattice().step > 0.0) problem.use_reading_bias(*reading_bias_);
+      if (rough || reading_bias_->lattice().step > 0.0) best = run(best, 0.1, true);
     }
     count(problem);
     return least_squares_result(kind, best, converged && polish_converged, message);
   }
 
-
   // The recordings' lattice and the σ (on a grid of 0.05–0.7 steps) whose mean reading fits
-  // `model` best; no lattice (step 0) when the levels lie on none or the model quantises.
+  // `model` best, its gain and offsets those of the levels. None (step 0) when the levels lie on
+  // no lattice, when the model quantises, or when the misfit dwarfs the lattice: an RMS residual
+  // above one step is not the quantiser's (its mean reading's bias is at most half a step), and
+  // the bias would only roughen the cost.
   ReadingBias best_reading_bias(ModelKind kind, const Model& model) const {
-    ReadingBias best;
-    if (options_.actuation.quantum_mm > 0.0) return best;
+    if (options_.actuation.quantum_mm > 0.0) return {};
     const SensorLattice lattice = recorded_lattice(data_);
-    if (lattice.step == 0.0) return best;
+    if (lattice.step == 0.0) return {};
     Problem problem(kind, data_, options_);
     problem.use_least_squares();
+    Model m = model;
+    const double level_cost = problem.cost(m);  // h Σ e², with K and the offsets fitted
+    double duration = 0.0;
+    for (const auto* d : data_) duration += d->h * static_cast<double>(d->size());
+    if (!(std::sqrt(level_cost / duration) <= lattice.step)) return {};
+    std::vector<std::vector<double>> g;
+    problem.unit_responses(m, g);
+    ReadingBias best;
     double best_cost = kInf;
     for (double ratio : {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.7}) {
-      const ReadingBias candidate{lattice, ratio * lattice.step};
+      const ReadingBias candidate(lattice, ratio * lattice.step);
       problem.use_reading_bias(candidate);
-      Model m = model;
-      const double c = problem.cost(m);
+      const double c = problem.squared_error(m, g);  // at the levels' gain and offsets
       if (c < best_cost) {
         best_cost = c;
         best = candidate;
@@ -374,7 +402,7 @@ class FitSession {
                                  const std::string& message) const {
     Problem problem(kind, data_, options_);
     problem.use_least_squares();
-    if (reading_bias_ && reading_bias_->lattice.step > 0.0) problem.use_reading_bias(*reading_bias_);
+    if (reading_bias_ && reading_bias_->lattice().step > 0.0) problem.use_reading_bias(*reading_bias_);
     Model m = model;
     const double cost = problem.cost(m);
     FitResult r = finish(m, data_, options_.simulation, problem.offsets());
