@@ -12,6 +12,7 @@ struct Claim {
   std::string table;  // "table4"
   std::string text;   // the whole sentence, ending with its verdict
   bool holds = false;
+  std::string why;    // for a claim that does not hold: its cause and figure (explanations.hpp)
 };
 
 // "SUBJECT at op1 and op2: paper +3.13 and +5.91 UNIT, here +2.10 and −0.40 UNIT — holds." The

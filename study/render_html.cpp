@@ -33,7 +33,7 @@ body{font-family:system-ui,sans-serif;max-width:1100px;margin:1em auto;padding:0
 table{border-collapse:collapse;margin:.5em 0 1em;font-size:90%}
 td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
 th{background:#f3f3f3} td:first-child{text-align:left}
-.holds{color:#17692b}.fails{color:#a3141c}
+.holds{color:#17692b}.fails{color:#a3141c}.why{color:#333;font-size:92%}
 .plot{margin:.5em 0 1.5em} .plot svg{background:#fff;border:1px solid #ddd}
 .legend span{margin-right:1em;font-size:85%}
 small{color:#666}
@@ -92,7 +92,15 @@ std::string markdown_to_html(const std::string& md) {
       if (!in_list) out << "<ul>\n";
       in_list = true;
       const bool holds = line.find("**holds**") != std::string::npos;
-      out << "<li class=\"" << (holds ? "holds" : "fails") << "\">" << inline_md(line.substr(2)) << "</li>\n";
+      // A failing claim's cause (" *Why:* …") in the text's colour: the verdict is red, not the reason.
+      std::string claim = line.substr(2), why;
+      if (const auto at = claim.find(" *Why:* "); at != std::string::npos) {
+        why = claim.substr(at + 8);
+        claim.resize(at);
+      }
+      out << "<li><span class=\"" << (holds ? "holds" : "fails") << "\">" << inline_md(claim) << "</span>";
+      if (!why.empty()) out << "<br><span class=\"why\"><i>Why:</i> " << inline_md(why) << "</span>";
+      out << "</li>\n";
       continue;
     }
     if (in_list) {

@@ -112,7 +112,9 @@ nlohmann::json to_json(const StudyResult& r) {
                           {"bandwidth_measured_rad_s", r.spectrum.bandwidth_measured_rad_s},
                           {"bandwidth_paper_rad_s", 5.58}};
   nlohmann::json claims = nlohmann::json::array();
-  for (const auto& c : r.claims) claims.push_back({{"table", c.table}, {"holds", c.holds}, {"text", c.text}});
+  for (const auto& c : r.claims) {
+    claims.push_back({{"table", c.table}, {"holds", c.holds}, {"text", c.text}, {"why", c.why}});
+  }
   out["conclusions"] = claims;
   return out;
 }
@@ -153,7 +155,10 @@ std::string to_markdown(const StudyResult& r) {
      << " hold here.\n\n";
   const auto claims_of = [&](const std::string& id) {
     for (const auto& c : r.claims) {
-      if (c.table == id) md << "- " << (c.holds ? "**holds** " : "**does not hold** ") << c.text << "\n";
+      if (c.table != id) continue;
+      md << "- " << (c.holds ? "**holds** " : "**does not hold** ") << c.text;
+      if (!c.why.empty()) md << " *Why:* " << c.why;
+      md << "\n";
     }
     md << "\n";
   };

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "reduced_models/metrics.hpp"
+#include "study/explanations.hpp"
 #include "study/text.hpp"
 
 namespace canalsim::study {
@@ -261,6 +262,7 @@ StudyResult run_study(const std::map<std::string, Recording>& recordings, const 
   for (const auto& name : roles.fit_all) r.regimes.push_back(regime_summary(name, recordings.at(name), data.at(name)));
   r.spectrum = prbs_spectrum(data.at(roles.fit_all.front()), options);
   r.claims = conclusions(r);
+  for (auto& claim : r.claims) claim.why = why_it_fails(claim, r);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
