@@ -212,16 +212,29 @@ class FitSession {
     }
     const bool least_squares = polished_by_least_squares(kind);
     if (least_squares) stage(kind, "polishing by least squares");
-    FitResult r = least_squares ? polish_least_squares(kind, model, converged, message)
+    // A model fitted only to be compared with one that contains it is polished to a relative
+    // 1e-6 (the comparison), and polished to the end only when it wins (below).
+    const bool precise = nesting_depth_ == 0;
+    FitResult r = least_squares ? polish_least_squares(kind, model, converged, message, precise)
                                 : result(model, converged, message);
     // A model that contains another must not fit worse than it: the inner model's fit, written
     // as this model (λ = 1, γ = 0), is the same response, and replaces the fit if it is better.
     for (const auto& nesting : nested_models(kind)) {
       if (!nesting_allowed(nesting, options_)) continue;
+      ++nesting_depth_;
       const FitResult& inner = fit(nesting.inner);
+      --nesting_depth_;
       const Model outer = embed(kind, inner.model, nesting, data_, options_);
       FitResult embedded = least_squares ? least_squares_result(kind, outer, inner.converged, inner.message)
                                          : result(outer, inner.converged, inner.message);
+      // The inner model polished to 1e-6 decides unless it comes within 1e-4 of winning (its
+      // last iterations gain less than that): then it is polished to the end first.
+      const bool loose_inner = least_squares && polished_by_gauss_newton(nesting.inner) && nesting_depth_ == 0;
+      if (loose_inner && embedded.cost_total < r.cost_total * (1.0 + 1e-4)) {
+        const FitResult inner_precise = polish_least_squares(nesting.inner, inner.model, inner.converged, inner.message, true);
+        embedded = least_squares_result(kind, embed(kind, inner_precise.model, nesting, data_, options_),
+                                        inner.converged, inner.message);
+      }
       if (embedded.cost_total < r.cost_total) r = std::move(embedded);
     }
     return fits_.emplace(kind, std::move(r)).first->second;
@@ -328,7 +341,7 @@ class FitSession {
   // run with K and the output offsets fitted with the other parameters, L within
   // ±max(2 samples, T/10), on a quantising sensor's mean reading where that matters.
   FitResult polish_least_squares(ModelKind kind, const Model& start, bool converged,
-                                 const std::string& message) {
+                                 const std::string& message, bool precise) {
     // NLopt's tolerances far below the default: the cost is the noise floor n σ² plus the
     // misfit, and what separates the optimum from its neighbourhood is a change of about σ², a
     // relative 1/n (1e-5 for 10⁵ samples) that ftol_rel = 1e-4 would stop short of (measured:
@@ -350,19 +363,37 @@ class FitSession {
     };
     // A quantising sensor: fit its mean reading (sensor_reading.hpp), with the noise σ that fits
     // best at the levels' optimum. The first polish of the session finds that optimum and sets
-    // the sensor for all (a rough optimum where a sensor's lattice will be polished on again);
-    // the others fit the mean reading from the start.
+    // the sensor for all (a rough optimum where a sensor's lattice will be polished on again, on
+    // the searched part of a long record: it only picks σ and starts the polish); the others fit
+    // the mean reading from the start.
     const bool sensor_known = reading_bias_.has_value();
     if (sensor_known && reading_bias_->lattice().step > 0.0) problem.use_reading_bias(*reading_bias_);
     const bool rough = !sensor_known && recorded_lattice(data_).step > 0.0;
-    Model best = run(start, 0.3, !rough);
+    Model best = rough && polished_by_gauss_newton(kind) && !search_copies_.empty()
+                     ? levels_optimum_on_the_searched_part(kind, start)
+                     : run(start, 0.3, precise && !rough);
     if (!sensor_known) {
       reading_bias_ = best_reading_bias(kind, best);
       if (reading_bias_->lattice().step > 0.0) problem.use_reading_bias(*reading_bias_);
-      if (rough || reading_bias_->lattice().step > 0.0) best = run(best, 0.1, true);
+      if (rough || reading_bias_->lattice().step > 0.0) best = run(best, 0.1, precise);
     }
     count(problem);
     return least_squares_result(kind, best, converged && polish_converged, message);
+  }
+
+  // The least-squares optimum of the levels on the search's copy of the recordings, from `start`.
+  Model levels_optimum_on_the_searched_part(ModelKind kind, const Model& start) {
+    Problem searched(kind, search_data_, search_options_);
+    searched.use_least_squares();
+    const char* scale = dynamics_parameter(kind);
+    const double T = scale ? get_parameter(start.p, scale) : 0.0;
+    double cost = 0.0;
+    bool converged = true;
+    std::string message;
+    const Model best = searched.least_squares_polish(start, std::max(0.1 * T, 2.0 * search_data_.front()->h), false,
+                                                     cost, converged, message);
+    count(searched);
+    return best;
   }
 
   // The recordings' lattice and the σ (on a grid of 0.05–0.7 steps) whose mean reading fits
@@ -436,6 +467,7 @@ class FitSession {
   std::vector<ExperimentData> search_copies_;
   std::vector<const ExperimentData*> search_data_;
   double polish_bracket_s_ = 0.0;
+  int nesting_depth_ = 0;  // > 0 while fitting a model nested in the one asked for
   std::optional<ReadingBias> reading_bias_;  // the sensor of the least-squares polish, once set
   std::map<ModelKind, Searched> searched_;  // on the search data
   std::map<ModelKind, FitResult> fits_;     // on the recordings
