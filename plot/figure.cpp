@@ -16,7 +16,7 @@ namespace {
 // lower-case letters of a sans-serif face at these sizes.
 constexpr double kTickFont = 11.0, kTitleFont = 13.0, kLabelFont = 12.0;
 constexpr double kCharWidth = 0.6 * kTickFont;
-constexpr double kSide = 10.0, kRightMargin = 16.0, kPanelTitle = 20.0, kPanelGap = 10.0;
+constexpr double kSide = 10.0, kRightMargin = 16.0, kPanelTitle = 20.0, kPanelGap = 16.0;
 constexpr double kXLabels = 38.0;  // tick labels and the x title under a plot area
 constexpr double kLegendRow = 18.0, kSwatch = 24.0;
 
@@ -128,9 +128,19 @@ std::string tick_text(const ResolvedAxis& a, double v) {
   return a.scale == Scale::log ? log_tick_label(v) : tick_label(v, a.step);
 }
 
-// The log axis' labelled ticks: its decades, and 2 and 5 times them when it spans less than two.
+// The log axis' labelled ticks: its decades — every second or third when there are more than eight,
+// so that labels never touch — and 2 and 5 times them when it spans less than two.
 std::vector<double> labelled_ticks(const ResolvedAxis& a) {
-  if (a.scale == Scale::linear || a.ticks.size() >= 2) return a.ticks;
+  if (a.scale == Scale::linear) return a.ticks;
+  if (a.ticks.size() > 8) {
+    const auto every = static_cast<long>((a.ticks.size() + 7) / 8);
+    std::vector<double> out;
+    for (const double v : a.ticks) {
+      if (std::lround(std::log10(v)) % every == 0) out.push_back(v);
+    }
+    return out;
+  }
+  if (a.ticks.size() >= 2) return a.ticks;
   std::vector<double> out = a.ticks;
   for (const double v : a.minor_ticks) {
     const double m = v / std::pow(10.0, std::floor(std::log10(v) + 1e-9));
@@ -280,11 +290,7 @@ void draw_axes_text(std::ostream& o, const Panel& p, const PanelFrame& fr, bool 
       << "' text-anchor='end'>" << html::escape(tick_text(fr.y, v)) << "</text>";
   }
   if (!p.y.title().empty()) {
-    const double cx = fr.left - 5 - [&] {
-      double w = 0.0;
-      for (const double v : labelled_ticks(fr.y)) w = std::max(w, text_width(tick_text(fr.y, v), kTickFont));
-      return w;
-    }() - 10.0;
+    const double cx = fr.y_title_x;
     const double cy = fr.top + fr.height / 2;
     o << "<text x='" << at(cx) << "' y='" << at(cy) << "' font-size='" << kLabelFont << "' text-anchor='middle' transform='rotate(-90 "
       << at(cx) << ' ' << at(cy) << ")'>" << html::escape(p.y.title()) << "</text>";
@@ -323,7 +329,8 @@ void draw_panel(std::ostream& o, const Figure& f, std::size_t index, const Panel
       // The label sits inside the area, on the side with room.
       const bool room_right = fr.x.fraction(m.x) < 0.8;
       o << "<text x='" << at(x + (room_right ? 4 : -4)) << "' y='" << at(fr.top + 13) << "' font-size='" << kTickFont
-        << "' fill='#444' text-anchor='" << (room_right ? "start" : "end") << "'>" << html::escape(m.label) << "</text>";
+        << "' fill='#444' stroke='#ffffff' stroke-width='3' paint-order='stroke' text-anchor='" << (room_right ? "start" : "end")
+        << "'>" << html::escape(m.label) << "</text>";
     }
   }
   o << "<rect x='" << at(fr.left) << "' y='" << at(fr.top) << "' width='" << at(fr.width) << "' height='" << at(fr.height)
@@ -436,6 +443,7 @@ std::vector<PanelFrame> layout(const Figure& f) {
     for (std::size_t i = row * columns; i < std::min(f.panels.size(), (row + 1) * columns); ++i) {
       PanelFrame& fr = frames[i];
       fr.left = kSide + cell * static_cast<double>(i - row * columns) + left;
+      fr.y_title_x = fr.left - left + 0.75 * kLabelFont + 2.0;  // the rotated title's glyphs just inside the cell
       fr.width = cell - left - kRightMargin;
       fr.top = top + title;
       fr.height = area_height(f, f.panels[i]);

@@ -92,6 +92,7 @@ struct ResolvedAxis {
 
 struct PanelFrame {
   double left = 0.0, top = 0.0, width = 0.0, height = 0.0;  // the plot area, px
+  double y_title_x = 0.0;  // where the y axis title is centred: the same in every panel of a column
   ResolvedAxis x, y;
   double pixel_x(double value) const { return left + x.fraction(value) * width; }
   double pixel_y(double value) const { return top + height - y.fraction(value) * height; }

@@ -11,7 +11,8 @@ namespace canalsim::plot {
 
 // The colour of a named series, matched without regard to case on the whole name: recorded
 // (measured), nominal, calibrated, corrected, pde (the linearised pool), the reduced models liom,
-// lfom, nliom, nlfom-s, nlfom-f, id, idz, and the command. "" for a name the palette does not know.
+// lfom, nliom-s, nliom-f, nlfom-s, nlfom-f, id, idz, the command and the upstream level y_up. ""
+// for a name the palette does not know.
 std::string named_colour(std::string_view name);
 
 // The colour of a name the palette knows, else the index'th of the palette's other colours

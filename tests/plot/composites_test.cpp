@@ -136,6 +136,8 @@ TEST(Bode, GainInDecibelsAbovePhaseInDegreesOnDecades) {
 TEST(Palette, TheSameModelHasTheSameColourEverywhere) {
   EXPECT_EQ(series_colour("LFOM"), series_colour("lfom", 5));
   EXPECT_NE(series_colour("LIOM"), series_colour("LFOM"));
+  EXPECT_NE(series_colour("NLIOM-S"), series_colour("NLFOM-S"));
+  EXPECT_NE(series_colour("NLIOM-F"), series_colour("NLFOM-F"));
   EXPECT_NE(series_colour("nominal"), series_colour("calibrated"));
   EXPECT_NE(series_colour("recorded"), series_colour("corrected"));
   EXPECT_EQ(named_colour("op1"), "");
