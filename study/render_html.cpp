@@ -256,22 +256,24 @@ plot::Figure spectrum_figure(const StudyResult& r) {
   double peak = 0.0;
   for (const double v : r.spectrum.envelope) peak = std::max(peak, v);
   if (peak > 0.0) p.y.low = std::pow(10.0, std::floor(std::log10(peak * 1e-3)));
-  const auto add = [&](const std::string& label, std::size_t index, plot::Style style, const std::vector<double>& x,
+  const auto add = [&](const std::string& label, const std::string& colour, plot::Style style, const std::vector<double>& x,
                        const std::vector<double>& y) {
     plot::Series s;
     s.label = label;
-    s.colour = plot::series_colour(label, index);
+    s.colour = colour;
     s.style = style;
     s.x = x;
     s.y = y;
     p.series.push_back(std::move(s));
     return &p.series.back();
   };
-  add("PRBS lines (recorded command)", 0, plot::Style::stems, r.spectrum.omega, r.spectrum.magnitude)->width = 0.8;
-  add("envelope Tc √(N+1) |sinc|", 1, plot::Style::line, r.spectrum.omega, r.spectrum.envelope);
-  add("unit step 1/ω", 2, plot::Style::line, r.spectrum.omega, r.spectrum.step);
+  // The command's lines in the command's colour, the envelope dark over them.
+  add("PRBS lines (recorded command)", plot::series_colour("command"), plot::Style::stems, r.spectrum.omega, r.spectrum.magnitude)
+      ->width = 0.6;
+  add("envelope Tc √(N+1) |sinc|", plot::series_colour("recorded"), plot::Style::line, r.spectrum.omega, r.spectrum.envelope);
+  add("unit step 1/ω", plot::series_colour("step", 3), plot::Style::line, r.spectrum.omega, r.spectrum.step);
   if (!r.spectrum.omega.empty()) {
-    add("envelope max/√2 (−3 dB)", 3, plot::Style::line, {r.spectrum.omega.front(), r.spectrum.omega.back()},
+    add("envelope max/√2 (−3 dB)", plot::series_colour("half power", 0), plot::Style::line, {r.spectrum.omega.front(), r.spectrum.omega.back()},
         {peak / std::sqrt(2.0), peak / std::sqrt(2.0)})->dashed = true;
   }
   f.panels.push_back(std::move(p));
