@@ -130,6 +130,7 @@ struct Series {
   std::string recording, channel;
   bool validation = false;
   std::vector<double> t, recorded, nominal, calibrated;
+  std::vector<double> u;  // the command that drove the replay [mm], for the report's step zoom
 };
 
 // One gate law of CalibrateOptions::gate_laws, calibrated.

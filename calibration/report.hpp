@@ -6,6 +6,7 @@
 #include <string>
 
 #include "calibration/calibrate.hpp"
+#include "plot/figure.hpp"
 
 namespace canalsim::calibration {
 
@@ -18,6 +19,12 @@ std::string gate_law_lines(const Calibration& c);
 // The grids calibrated on (CalibrateOptions::grid_refinements) and why the refinement stopped;
 // empty when none was asked for.
 std::string grid_lines(const Calibration& c);
+// The report's figures, each named for its standalone file (RECORDING_CHANNEL_levels_and_residual,
+// …_residual_autocorrelation, …_step_zoom, …_residual_spectrum): per recording and level channel the
+// recorded level against the nominal and the calibrated scenario with the residuals [mm] below, the
+// residuals' autocorrelation with the 95 % band, the response to the largest command change and the
+// residuals' amplitude spectra.
+std::vector<plot::Figure> report_figures(const Calibration& c);
 std::string html_report(const Calibration& c, const std::string& title);
 
 }  // namespace canalsim::calibration

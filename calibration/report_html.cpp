@@ -9,71 +9,19 @@
 
 #include "core/html.hpp"
 #include "core/format.hpp"
+#include "plot/composites.hpp"
+#include "plot/palette.hpp"
 
 namespace canalsim::calibration {
 namespace {
 
 
-struct Line {
-  std::vector<double> x, y;
-  std::string colour, label;
-};
-
-// A line plot in an SVG of 720 × 240 with axes, ticks at the ends and a legend; log axes when asked.
-std::string plot(const std::vector<Line>& lines, const std::string& x_label, const std::string& y_label,
-                 bool log_x = false, bool log_y = false) {
-  const double W = 720, H = 240, L = 60, R = 150, T = 10, B = 40;
-  auto tx = [&](double v) { return log_x ? std::log10(std::max(v, 1e-300)) : v; };
-  auto ty = [&](double v) { return log_y ? std::log10(std::max(v, 1e-300)) : v; };
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (const auto& l : lines) {
-    for (std::size_t k = 0; k < l.x.size(); ++k) {
-      if (!std::isfinite(l.y[k]) || (log_x && l.x[k] <= 0) || (log_y && l.y[k] <= 0)) continue;
-      x0 = std::min(x0, tx(l.x[k]));
-      x1 = std::max(x1, tx(l.x[k]));
-      y0 = std::min(y0, ty(l.y[k]));
-      y1 = std::max(y1, ty(l.y[k]));
-    }
-  }
-  if (!(x1 > x0)) x1 = x0 + 1;
-  if (!(y1 > y0)) { y0 -= 0.5; y1 += 0.5; }
-  auto px = [&](double v) { return L + (tx(v) - x0) / (x1 - x0) * (W - L - R); };
-  auto py = [&](double v) { return H - B - (ty(v) - y0) / (y1 - y0) * (H - T - B); };
-  std::ostringstream s;
-  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' class='plot'>";
-  s << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B
-    << "' fill='none' stroke='#999'/>";
-  auto label = [&](double v, bool log) { return format_g(log ? std::pow(10.0, v) : v, 4); };
-  s << "<text x='" << L << "' y='" << H - B + 14 << "' font-size='11'>" << label(x0, log_x) << "</text>";
-  s << "<text x='" << W - R << "' y='" << H - B + 14 << "' font-size='11' text-anchor='end'>" << label(x1, log_x) << "</text>";
-  s << "<text x='" << L - 4 << "' y='" << H - B << "' font-size='11' text-anchor='end'>" << label(y0, log_y) << "</text>";
-  s << "<text x='" << L - 4 << "' y='" << T + 10 << "' font-size='11' text-anchor='end'>" << label(y1, log_y) << "</text>";
-  s << "<text x='" << (L + W - R) / 2 << "' y='" << H - 6 << "' font-size='12' text-anchor='middle'>" << html::escape(x_label) << "</text>";
-  s << "<text x='12' y='" << (H - B + T) / 2 << "' font-size='12' transform='rotate(-90 12 " << (H - B + T) / 2
-    << ")' text-anchor='middle'>" << html::escape(y_label) << "</text>";
-  int row = 0;
-  for (const auto& l : lines) {
-    s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
-    // At most ~1500 points per line keeps the page light.
-    const std::size_t stride = std::max<std::size_t>(1, l.x.size() / 1500);
-    for (std::size_t k = 0; k < l.x.size(); k += stride) {
-      if (!std::isfinite(l.y[k]) || (log_x && l.x[k] <= 0) || (log_y && l.y[k] <= 0)) continue;
-      s << format_fixed(px(l.x[k]), 1) << ',' << format_fixed(py(l.y[k]), 1) << ' ';
-    }
-    s << "'/>";
-    s << "<line x1='" << W - R + 10 << "' x2='" << W - R + 30 << "' y1='" << T + 12 + 16 * row << "' y2='"
-      << T + 12 + 16 * row << "' stroke='" << l.colour << "' stroke-width='2'/>";
-    s << "<text x='" << W - R + 34 << "' y='" << T + 16 + 16 * row << "' font-size='11'>" << html::escape(l.label) << "</text>";
-    ++row;
-  }
-  s << "</svg>";
-  return s.str();
-}
-
 // Amplitude spectrum |DFT| of a residual at 120 log-spaced frequencies between 1/T and the
 // Nyquist frequency (direct sums: a few hundred thousand operations per series).
-Line spectrum(const std::vector<double>& e, double period, const std::string& colour, const std::string& label) {
-  Line l{{}, {}, colour, label};
+plot::Series spectrum(const std::vector<double>& e, double period, const std::string& name, const std::string& label) {
+  plot::Series l;
+  l.label = label;
+  l.colour = plot::series_colour(name);
   const double n = static_cast<double>(e.size());
   if (e.size() < 8) return l;
   const double f0 = 1.0 / (n * period), f1 = 0.5 / period;
@@ -90,6 +38,9 @@ Line spectrum(const std::vector<double>& e, double period, const std::string& co
   }
   return l;
 }
+
+// Only the level channels are plotted: the report is about the levels the calibration fitted.
+bool plotted(const Series& s) { return s.channel == "y_dwe_mm" || s.channel == "y_dw_mm"; }
 
 // The correlation matrix as coloured cells: blue −1, white 0, red +1, grey undetermined.
 std::string correlation_picture(const Calibration& c) {
@@ -124,6 +75,42 @@ std::string correlation_picture(const Calibration& c) {
 }
 
 }  // namespace
+
+std::vector<plot::Figure> report_figures(const Calibration& c) {
+  std::vector<plot::Figure> figures;
+  if (!c.ok) return figures;
+  for (const auto& s : c.series) {
+    if (!plotted(s) || s.t.empty()) continue;
+    const std::string what = s.recording + (s.validation ? " (validation)" : "") + ", " + s.channel;
+    const std::string stem = plot::file_stem(s.recording) + (s.validation ? "_validation_" : "_") + plot::file_stem(s.channel);
+    plot::Comparison cmp;
+    cmp.t = s.t;
+    cmp.measured = {"recorded", s.recorded, "recorded"};
+    cmp.models = {{"nominal", s.nominal, "nominal scenario"}, {"calibrated", s.calibrated, "calibrated scenario"}};
+    cmp.name = stem + "_levels_and_residual";
+    cmp.title = what + ": recorded level and scenarios, residual below";
+    figures.push_back(plot::measured_vs_model(cmp));
+    const std::vector<plot::Curve> residuals = plot::residuals(cmp);
+    figures.push_back(plot::autocorrelation_figure(stem + "_residual_autocorrelation", what + ": autocorrelation of the residual",
+                                                   residuals));
+    cmp.name = stem + "_step_zoom";
+    cmp.title = what + ": the response to the largest command change";
+    if (auto zoom = plot::step_zoom(cmp, s.u, "mm")) figures.push_back(std::move(*zoom));
+    plot::Figure spectra;
+    spectra.name = stem + "_residual_spectrum";
+    spectra.title = what + ": amplitude spectrum of the residual";
+    plot::Panel p;
+    p.x = plot::Axis{"f", "Hz"};
+    p.x.scale = plot::Scale::log;
+    p.y = plot::Axis{"|residual| amplitude", "mm"};
+    p.y.scale = plot::Scale::log;
+    const double period = s.t.size() > 1 ? s.t[1] - s.t[0] : 1.0;
+    for (const auto& r : residuals) p.series.push_back(spectrum(r.y, period, r.name, r.legend()));
+    spectra.panels.push_back(std::move(p));
+    figures.push_back(std::move(spectra));
+  }
+  return figures;
+}
 
 std::string html_report(const Calibration& c, const std::string& title) {
   std::ostringstream h;
@@ -179,24 +166,8 @@ std::string html_report(const Calibration& c, const std::string& title) {
   if (!c.grids.empty()) h << "<h3>Grid</h3><pre>" << html::escape(grid_lines(c)) << "</pre>";
   if (!c.time_offset_note.empty()) h << "<h3>Time offset</h3><p>" << html::escape(c.time_offset_note) << "</p>";
   if (!c.written_note.empty()) h << "<h3>Model written</h3><p>" << html::escape(c.written_note) << "</p>";
-  h << "<h2>Responses and residuals</h2>";
-  for (const auto& s : c.series) {
-    if (s.channel != "y_dwe_mm" && s.channel != "y_dw_mm") continue;
-    h << "<h3>" << html::escape(s.recording) << (s.validation ? " (validation)" : "") << " &mdash; " << html::escape(s.channel) << "</h3>";
-    h << plot({{s.t, s.recorded, "#777", "recorded"}, {s.t, s.nominal, "#d62728", "nominal"},
-               {s.t, s.calibrated, "#1f77b4", "calibrated"}},
-              "t [s]", s.channel);
-    std::vector<double> before(s.t.size()), after(s.t.size());
-    for (std::size_t k = 0; k < s.t.size(); ++k) {
-      before[k] = s.recorded[k] - s.nominal[k];
-      after[k] = s.recorded[k] - s.calibrated[k];
-    }
-    h << plot({{s.t, before, "#d62728", "residual before"}, {s.t, after, "#1f77b4", "residual after"}}, "t [s]",
-              "recorded - model");
-    const double period = s.t.size() > 1 ? s.t[1] - s.t[0] : 1.0;
-    h << plot({spectrum(before, period, "#d62728", "before"), spectrum(after, period, "#1f77b4", "after")}, "f [Hz]",
-              "|residual| amplitude", true, true);
-  }
+  h << "<h2 id='responses'>Responses and residuals</h2>";
+  for (const auto& figure : report_figures(c)) h << plot::render_svg(figure) << '\n';
   h << "<h2>Solver</h2><pre>" << html::escape(c.solver_report) << "</pre></body></html>";
   return h.str();
 }

@@ -1,5 +1,5 @@
 // `canalsim calibrate --scenario S REC... -o OUT.toml [--params P,...] [--validate REC...]
-// [--gate-laws L,...] [--json F] [--report F.html] [--threads N]`: fits scenario parameters to recordings
+// [--gate-laws L,...] [--json F] [--report F.html] [--plots-dir DIR] [--threads N]`: fits scenario parameters to recordings
 // (calibration/calibrate.hpp; docs/calibration.md), prints the table and writes the calibrated
 // scenario — the input file (or built-in text) with the calibrated keys replaced, each with its
 // standard deviation in a comment. Outputs are checked before the work and written atomically
@@ -12,6 +12,7 @@
 
 #include "calibration/calibrate.hpp"
 #include "calibration/report.hpp"
+#include "cli/plots_dir.hpp"
 #include "calibration/scenario_file.hpp"
 #include "cli/checks.hpp"
 #include "cli/recording_format.hpp"
@@ -35,6 +36,7 @@ struct CalibrateArguments {
   std::string scenario;
   std::vector<std::string> recordings, validation, params, channels, gate_laws;
   std::string out, json, report;
+  PlotsDirectory plots;
   int threads = 2;
   int starts = 2;
   int grid_refinements = 2;
@@ -81,6 +83,7 @@ int run(const CalibrateArguments& args) {
   for (const NamedFile& v : named_files("--validate recording", args.validation)) inputs.push_back(v);
   inputs.push_back({"--scenario", args.scenario});
   check_outputs({{"-o", args.out}, {"--json", args.json}, {"--report", args.report}}, inputs);
+  args.plots.check();
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   const std::string text = scenarios::scenario_toml_text(args.scenario);
   const std::vector<Recording> recordings = read_all(args.recordings, args.format);
@@ -127,7 +130,7 @@ int run(const CalibrateArguments& args) {
     std::cerr << "canalsim: error: calibration failed: " << c.message << '\n';
     return 1;
   }
-  // The scenario, the JSON and the report are one set, written all or nothing.
+  // The scenario, the JSON, the report and the plots are one set, written all or nothing.
   std::vector<std::string> recording_names;
   for (const auto& r : args.recordings) recording_names.push_back(std::filesystem::path(r).filename().string());
   std::vector<FileContents> outputs{
@@ -136,7 +139,7 @@ int run(const CalibrateArguments& args) {
   if (!args.report.empty()) {
     outputs.emplace_back(args.report, calibration::html_report(c, "canalsim calibration: " + s.name));
   }
-  write_files_atomically(outputs);
+  outputs = args.plots.write(std::move(outputs), args.plots.dir.empty() ? std::vector<plot::Figure>{} : calibration::report_figures(c));
   for (const auto& [file, contents] : outputs) std::cout << "wrote " << file.string() << '\n';
   return 0;
 }
@@ -167,6 +170,8 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--json", args->json, "Write the calibration as JSON");
   args->format.add_options(cmd);
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
+  args->plots.add_option(cmd, "per recording R and level channel C, R_C_levels_and_residual.svg, R_C_residual_autocorrelation.svg, "
+                              "R_C_step_zoom.svg and R_C_residual_spectrum.svg (R_validation_C_… for --validate recordings)");
   cmd->add_option("--threads", args->threads, "Simulations in parallel (default 2)")->check(thread_count());
   cmd->add_option("--starts", args->starts, "Levenberg-Marquardt starts (default 2)")->check(integer_in(1, 10, "a number of starts"));
   cmd->add_option("--grid-refinements", args->grid_refinements,

@@ -1,4 +1,4 @@
-// `canalsim diagnose --scenario S REC.csv... [--json F] [--report F.html]`: replays each
+// `canalsim diagnose --scenario S REC.csv... [--json F] [--report F.html] [--plots-dir DIR]`: replays each
 // recording's gate command through the scenario, locates where model and recordings disagree,
 // names the missing physics from the catalog, refits it and shows the fit improve
 // (docs/diagnosis.md). With `--baseline BASE.csv... --` the scenario is first calibrated on the
@@ -22,6 +22,7 @@
 #include "diagnosis/model_diagnosis.hpp"
 #include "reduced_models/models.hpp"
 #include "diagnosis/report.hpp"
+#include "cli/plots_dir.hpp"
 #include "scenarios/builtin.hpp"
 #include "core/format.hpp"
 #include "core/recording.hpp"
@@ -40,6 +41,7 @@ struct DiagnoseArguments {
   std::vector<std::string> baseline;
   std::string json;
   std::string report;
+  PlotsDirectory plots;
   std::vector<std::string> candidates;
   double fit_fraction = 0.5;
   int threads = 2;
@@ -83,10 +85,11 @@ void check_diagnosis_outputs(const DiagnoseArguments& args) {
   for (const NamedFile& b : named_files("--baseline recording", args.baseline)) inputs.push_back(b);
   if (!args.scenario.empty()) inputs.push_back({"--scenario", args.scenario});
   check_outputs({{"--json", args.json}, {"--report", args.report}}, inputs);
+  args.plots.check();
 }
 
-// The JSON and the HTML report are written together, all or nothing: a report that cannot be
-// written leaves no JSON behind either (and replaces neither).
+// The JSON, the HTML report and the plots are written together, all or nothing: a report that
+// cannot be written leaves no JSON behind either (and replaces neither).
 int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, const std::string& title,
                   const nlohmann::json& baseline = nullptr) {
   nlohmann::json json = diagnosis::to_json(d);
@@ -100,7 +103,7 @@ int write_outputs(const diagnosis::Diagnosis& d, const DiagnoseArguments& args, 
   std::vector<FileContents> outputs;
   if (!args.json.empty()) outputs.emplace_back(args.json, json.dump(2) + "\n");
   if (!args.report.empty()) outputs.emplace_back(args.report, diagnosis::html_report(d, title));
-  write_files_atomically(outputs);
+  outputs = args.plots.write(std::move(outputs), args.plots.dir.empty() ? std::vector<plot::Figure>{} : diagnosis::report_figures(d));
   for (const auto& [file, text] : outputs) std::cout << "wrote " << file.string() << '\n';
   return 0;
 }
@@ -275,6 +278,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--json", args->json, "Write the diagnosis as JSON");
   args->format.add_options(cmd);
   cmd->add_option("--report", args->report, "Write a self-contained HTML report");
+  args->plots.add_option(cmd, "per recording R, R_levels_and_residual.svg, R_residual_autocorrelation.svg and R_step_zoom.svg");
   cmd->add_option("--candidates", args->candidates, "Catalog effects to try, e.g. gate_leakage sensor_offset[y_dwe_mm]; a per-channel effect without [CHANNEL] is tried on every level channel (default: all; docs/diagnosis.md, section 4)")
       ->delimiter(',');
   cmd->add_option("--fit-fraction", args->fit_fraction, "Leading share of each recording used for fitting (default 0.5)")

@@ -1,9 +1,10 @@
 // `canalsim linearize SCENARIO -e EXPERIMENT [--freq LO:HI:N] [--input gate|inflow|offtake:I]
-// [--output y_dwe|y_dw|q|y_checkI] [--json F] [--csv F]`: the frequency response of the
+// [--output y_dwe|y_dw|q|y_checkI] [--json F] [--csv F] [--plots-dir DIR]`: the frequency response of the
 // linearised canal at the experiment's steady state (docs/linearization.md).
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -11,10 +12,12 @@
 
 #include "cli/checks.hpp"
 #include "cli/commands.hpp"
+#include "cli/plots_dir.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/format.hpp"
 #include "linearize/linearize.hpp"
+#include "plot/composites.hpp"
 #include "scenarios/builtin.hpp"
 
 namespace canalsim::cli {
@@ -25,6 +28,7 @@ struct LinearizeArguments {
   std::string freq, input = "gate", output = "y_dwe";
   std::string json, csv;
   int poles = 6;
+  PlotsDirectory plots;
 };
 
 std::string csv_text(const linearize::FrequencyResponse& r) {
@@ -96,6 +100,19 @@ void print_summary(const linearize::FrequencyResponse& r, const LinearizeArgumen
   }
 }
 
+// The response as a Bode plot, named for its file: bode_EXPERIMENT_OUTPUT_per_INPUT.
+plot::Figure bode_plot(const linearize::FrequencyResponse& r, const LinearizeArguments& args) {
+  std::vector<double> gain_db;
+  for (const auto& g : r.response) gain_db.push_back(20.0 * std::log10(std::abs(g)));
+  std::optional<plot::Window> band;
+  if (r.band) band = plot::Window{r.band->low, r.band->high};
+  return plot::bode_figure(
+      "bode_" + plot::file_stem(args.experiment) + "_" + plot::file_stem(args.output) + "_per_" + plot::file_stem(args.input),
+      args.scenario + " / " + args.experiment + ": " + r.output_name + " [" + r.output_unit + "] per " + r.input_name + " [" +
+          r.input_unit + "], linearised",
+      r.omega, {{"PDE", gain_db, linearize::unwrapped_phase_degrees(r.response), "linearised canal"}}, band);
+}
+
 void run(const LinearizeArguments& args) {
   // Every flag is checked before the work.
   linearize::LinearizeOptions options;
@@ -104,6 +121,7 @@ void run(const LinearizeArguments& args) {
   if (!args.freq.empty()) options.grid = linearize::parse_grid(args.freq, "--freq");
   options.poles = args.poles;
   check_outputs({{"--json", args.json}, {"--csv", args.csv}}, {{"--scenario", args.scenario}});
+  args.plots.check();
   const scenarios::Scenario s = scenarios::load_scenario_or_builtin(args.scenario);
   const auto* e = s.find_experiment(args.experiment);
   if (!e) {
@@ -120,7 +138,8 @@ void run(const LinearizeArguments& args) {
   std::vector<FileContents> outputs;  // written together, all or nothing
   if (!args.json.empty()) outputs.emplace_back(args.json, json_text(r, args));
   if (!args.csv.empty()) outputs.emplace_back(args.csv, csv_text(r));
-  write_files_atomically(outputs);
+  const std::vector<plot::Figure> figures = args.plots.dir.empty() ? std::vector<plot::Figure>{} : std::vector{bode_plot(r, args)};
+  outputs = args.plots.write(std::move(outputs), figures);
   print_summary(r, args);
 }
 
@@ -137,6 +156,7 @@ void add_linearize_command(CLI::App& app) {
   cmd->add_option("--poles", args->poles, "How many poles nearest the imaginary axis to report")->check(integer_in(0, 50, "a number of poles"));
   cmd->add_option("--json", args->json, "Write the response, gain, poles and delay as JSON");
   cmd->add_option("--csv", args->csv, "Write omega_rad_s,gain,phase_deg,real,imag as CSV");
+  args->plots.add_option(cmd, "bode_EXPERIMENT_OUTPUT_per_INPUT.svg (gain in dB and phase against log omega)");
   cmd->callback([args] { run(*args); });
 }
 

@@ -1,11 +1,12 @@
-// `canalsim reproduce [--out DIR]`: the paper's whole study (Gharab, Feliu-Batlle & Rivas-Perez
+// `canalsim reproduce [--out DIR] [--plots-dir DIR]`: the paper's whole study (Gharab, Feliu-Batlle & Rivas-Perez
 // 2019, Tables 1–8, Figures 4, 6, 8, 10) on recordings of the simulated laboratory canal.
 //
 //   1. simulate the lab experiments op1–op4, op1*, op2*, op3b, op4b (builtin scenario "lab") on two
 //      threads;
 //   2. run the study (study/study.hpp): fits, nominal models, γ sweeps, validation,
 //      uncertainty indices, each table next to the paper's, and the generated conclusions;
-//   3. write DIR/tables.json, DIR/tables.md and DIR/report.html (self-contained, opens offline).
+//   3. write DIR/tables.json, DIR/tables.md and DIR/report.html (self-contained, opens offline), the
+//      Bode section as DIR/bode.*, and with --plots-dir every figure as a standalone SVG file.
 //
 // Nothing is written until everything is computed; each file is written atomically and, if one
 // fails, the ones already written (and DIR, when this run created it) are removed.
@@ -24,6 +25,7 @@
 #include <vector>
 
 #include "cli/checks.hpp"
+#include "cli/plots_dir.hpp"
 #include "core/files.hpp"
 #include "cli/commands.hpp"
 #include "study/bode.hpp"
@@ -44,6 +46,7 @@ struct ReproduceArguments {
   std::string out = "reproduce";
   double gamma_step = 0.05;
   unsigned threads = 2;
+  PlotsDirectory plots;
 };
 
 // Fails early (before minutes of work) when DIR cannot be created or written.
@@ -105,6 +108,7 @@ void run_reproduce(const ReproduceArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path dir = args.out;
   check_output_directory(dir);
+  args.plots.check();
 
   study::StudyOptions options;
   options.gamma = {0.0, 10.0, args.gamma_step};
@@ -131,6 +135,11 @@ void run_reproduce(const ReproduceArguments& args) {
   const std::string bode_md = study::bode_markdown(bode);
   const std::string bode_html = study::bode_html(bode);
   const std::string html = study::to_html(result, recordings, options, study::bode_html_section(bode));
+  std::vector<plot::Figure> figures;
+  if (!args.plots.dir.empty()) {
+    figures = study::report_figures(result, recordings, options);
+    for (auto& f : study::bode_figures(bode)) figures.push_back(std::move(f));
+  }
   progress.finish();
 
   // Write: all or nothing. A file that cannot be replaced restores the others' previous contents
@@ -140,11 +149,11 @@ void run_reproduce(const ReproduceArguments& args) {
   if (created && !fs::create_directory(dir, ec)) {
     throw InputError(dir.string() + ": cannot create --out directory: " + ec.message());
   }
-  const std::vector<FileContents> files = {
+  std::vector<FileContents> files = {
       {dir / "tables.json", json}, {dir / "tables.md", md}, {dir / "report.html", html},
       {dir / "bode.json", bode_json}, {dir / "bode.md", bode_md}, {dir / "bode.html", bode_html}};
   try {
-    write_files_atomically(files);
+    files = args.plots.write(std::move(files), figures);
   } catch (...) {
     if (created) fs::remove(dir, ec);
     throw;
@@ -166,8 +175,11 @@ void add_reproduce_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "reproduce", "Run the paper's study (Tables 1-8, Figures 4, 6, 8, 10) on the simulated lab canal "
                    "and compare with the published values");
-  cmd->add_option("--out,-o", args->out, "Output directory for tables.json, tables.md, report.html")
+  cmd->add_option("--out,-o", args->out,
+                  "Output directory for tables.json, tables.md, report.html, bode.json, bode.md and bode.html")
       ->capture_default_str();
+  args->plots.add_option(cmd, "responses_OP.svg and validation_OP.svg (one panel per model), gamma_MODEL.svg, "
+                              "flow_regime_OP.svg, prbs_spectrum.svg and bode_OP.svg");
   cmd->add_option("--gamma-step", args->gamma_step, "Step of the gamma sweep over [0, 10]")
       ->capture_default_str()
       ->check(number_in(0.001, 10.0, "a step"));

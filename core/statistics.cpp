@@ -66,6 +66,24 @@ Eigen::MatrixXd block_score_products(const RowMajorMap& J, const std::vector<dou
 
 }  // namespace
 
+std::vector<double> autocorrelation(const std::vector<double>& series, int max_lag) {
+  const double mean = series.empty() ? 0.0 : std::accumulate(series.begin(), series.end(), 0.0) / static_cast<double>(series.size());
+  std::vector<double> x(series.size());
+  double r0 = 0.0;
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    x[k] = series[k] - mean;
+    r0 += x[k] * x[k];
+  }
+  std::vector<double> r(static_cast<std::size_t>(std::max(max_lag, 0)) + 1, 0.0);
+  if (r0 <= 0.0) return r;
+  for (std::size_t k = 0; k < r.size() && k < x.size(); ++k) {
+    double s = 0.0;
+    for (std::size_t t = 0; t + k < x.size(); ++t) s += x[t] * x[t + k];
+    r[k] = s / r0;
+  }
+  return r;
+}
+
 double integrated_autocorrelation_time(const std::vector<double>& e) {
   const std::size_t m = e.size();
   if (m < 3) return 1.0;

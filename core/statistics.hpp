@@ -20,6 +20,11 @@
 
 namespace canalsim {
 
+// The sample autocorrelation r(k) of a series about its mean, k = 0..max_lag: r(0) = 1, all zero
+// for a constant series. The residual tests of the diagnosis and the report's autocorrelation
+// plots read the same numbers.
+std::vector<double> autocorrelation(const std::vector<double>& series, int max_lag);
+
 // τ = 1 + 2 Σ ρ_k of one series, summed over the initial positive sequence of adjacent pairs
 // (Geyer 1992) up to a quarter of the series; 1 for a series shorter than 3 or constant.
 double integrated_autocorrelation_time(const std::vector<double>& series);

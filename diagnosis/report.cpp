@@ -3,6 +3,7 @@
 #include "core/json.hpp"
 #include "core/format.hpp"
 #include "core/html.hpp"
+#include "plot/composites.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -48,65 +49,6 @@ json mismatch_json(const Mismatch& m) {
               {"by_level", groups(m.by_level)}, {"by_channel", by_channel}};
 }
 
-
-struct Line {
-  const std::vector<double>* y;
-  std::string colour, label;
-};
-
-// An SVG line plot of several series over t, decimated to at most ~1500 points each, with
-// shaded [start, end] spans.
-std::string svg_plot(const std::vector<double>& t, const std::vector<Line>& lines,
-                     const std::vector<std::pair<double, double>>& spans, const std::string& y_label,
-                     double split_t) {
-  const double width = 900, height = 220, left = 55, right = 10, top = 10, bottom = 30;
-  double lo = 1e300, hi = -1e300;
-  for (const auto& l : lines) {
-    for (double v : *l.y) { lo = std::min(lo, v); hi = std::max(hi, v); }
-  }
-  if (!(hi > lo)) { lo -= 1.0; hi += 1.0; }
-  const double pad = 0.05 * (hi - lo);
-  lo -= pad;
-  hi += pad;
-  const double t0 = t.front(), t1 = std::max(t.back(), t0 + 1e-9);
-  auto X = [&](double x) { return left + (x - t0) / (t1 - t0) * (width - left - right); };
-  auto Y = [&](double y) { return top + (hi - y) / (hi - lo) * (height - top - bottom); };
-  std::ostringstream s;
-  s << "<svg viewBox='0 0 " << width << ' ' << height << "' width='100%' xmlns='http://www.w3.org/2000/svg'>";
-  for (const auto& [a, b] : spans) {
-    s << "<rect x='" << format_figure(X(a), 1) << "' y='" << top << "' width='" << format_figure(std::max(1.0, X(b) - X(a)), 1)
-      << "' height='" << height - top - bottom << "' fill='#fde2c8'/>";
-  }
-  if (split_t > t0 && split_t < t1) {
-    s << "<line x1='" << format_figure(X(split_t), 1) << "' x2='" << format_figure(X(split_t), 1) << "' y1='" << top << "' y2='"
-      << height - bottom << "' stroke='#999' stroke-dasharray='4 3'/><text x='" << format_figure(X(split_t) + 4, 1)
-      << "' y='" << top + 12 << "' font-size='11' fill='#666'>held-out &#8594;</text>";
-  }
-  s << "<rect x='" << left << "' y='" << top << "' width='" << width - left - right << "' height='"
-    << height - top - bottom << "' fill='none' stroke='#444'/>";
-  for (int k = 0; k <= 4; ++k) {
-    const double v = lo + (hi - lo) * k / 4.0;
-    s << "<text x='" << left - 4 << "' y='" << format_figure(Y(v) + 4, 1) << "' font-size='10' text-anchor='end'>"
-      << format_figure(v, 2) << "</text>";
-    const double tv = t0 + (t1 - t0) * k / 4.0;
-    s << "<text x='" << format_figure(X(tv), 1) << "' y='" << height - 12 << "' font-size='10' text-anchor='middle'>"
-      << format_figure(tv, 0) << "</text>";
-  }
-  s << "<text x='12' y='" << top + 100 << "' font-size='11' transform='rotate(-90 12 " << top + 100 << ")'>"
-    << html::escape(y_label) << "</text><text x='" << width / 2 << "' y='" << height - 1
-    << "' font-size='11' text-anchor='middle'>t [s]</text>";
-  const std::size_t stride = std::max<std::size_t>(1, t.size() / 1500);
-  double legend_x = left + 8;
-  for (const auto& l : lines) {
-    s << "<polyline fill='none' stroke='" << l.colour << "' stroke-width='1' points='";
-    for (std::size_t k = 0; k < t.size(); k += stride) s << format_figure(X(t[k]), 1) << ',' << format_figure(Y((*l.y)[k]), 1) << ' ';
-    s << "'/><text x='" << format_figure(legend_x, 1) << "' y='" << height - bottom - 6 << "' font-size='11' fill='"
-      << l.colour << "'>" << html::escape(l.label) << "</text>";
-    legend_x += 9.0 * static_cast<double>(l.label.size()) + 20.0;
-  }
-  s << "</svg>\n";
-  return s.str();
-}
 
 }  // namespace
 
@@ -319,6 +261,43 @@ std::string text_summary(const Diagnosis& d) {
   return s.str();
 }
 
+std::vector<plot::Figure> report_figures(const Diagnosis& d) {
+  std::vector<plot::Figure> figures;
+  if (!d.ok) return figures;
+  // A clean diagnosis (`none`) has no mismatch to point at: its largest-residual windows are noise.
+  const bool mismatch = d.verdict != "none";
+  const bool corrected = d.verdict != "none" && d.verdict != "unexplained";
+  for (std::size_t i = 0; i < d.series.size(); ++i) {
+    const RecordingSeries& r = d.series[i];
+    if (r.t.empty()) continue;
+    plot::Comparison c;
+    c.t = r.t;
+    c.measured = {"recorded", r.recorded, "recorded"};
+    c.models.push_back({"nominal", r.nominal, "nominal model"});
+    if (corrected) c.models.push_back({"corrected", r.corrected, "corrected (" + d.verdict + ")"});
+    if (mismatch) {
+      for (const auto& w : d.mismatch.windows) {
+        if (w.recording == r.name) c.windows.push_back({w.start_s, w.end_s});
+      }
+      c.window_label = "largest nominal residual";
+    }
+    if (r.fit_samples > 0 && r.fit_samples < r.t.size()) c.markers.push_back({r.t[r.fit_samples], "held-out →"});
+    const std::string stem = plot::file_stem(r.name);
+    c.name = stem + "_levels_and_residual";
+    c.title = r.name + ": recorded level and models, residual below";
+    figures.push_back(plot::measured_vs_model(c));
+    const int lags = i < d.tests_before.size() && !d.tests_before[i].autocorrelation.lags.empty()
+                         ? static_cast<int>(d.tests_before[i].autocorrelation.lags.size())
+                         : 50;
+    figures.push_back(plot::autocorrelation_figure(stem + "_residual_autocorrelation",
+                                                   r.name + ": autocorrelation of the residual", plot::residuals(c), lags));
+    c.name = stem + "_step_zoom";
+    c.title = r.name + ": the response to the largest command change";
+    if (auto zoom = plot::step_zoom(c, r.u, "mm")) figures.push_back(std::move(*zoom));
+  }
+  return figures;
+}
+
 std::string html_report(const Diagnosis& d, const std::string& title) {
   std::ostringstream s;
   s << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>" << html::escape(title)
@@ -389,26 +368,9 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
     if (g.samples) s << ' ' << html::escape(g.name) << ' ' << format_figure(g.rms, 3) << " mm;";
   }
   s << "</p>";
-  for (const auto& r : d.series) {
-    std::vector<std::pair<double, double>> spans;
-    for (const auto& w : d.mismatch.windows) {
-      if (w.recording == r.name) spans.emplace_back(w.start_s, w.end_s);
-    }
-    std::vector<double> before(r.t.size()), after(r.t.size());
-    for (std::size_t k = 0; k < r.t.size(); ++k) {
-      before[k] = r.recorded[k] - r.nominal[k];
-      after[k] = r.recorded[k] - r.corrected[k];
-    }
-    const double split = r.fit_samples < r.t.size() ? r.t[r.fit_samples] : r.t.back();
-    s << "<h3>" << html::escape(r.name) << "</h3>";
-    s << svg_plot(r.t, {{&r.recorded, "#000", "recorded"}, {&r.nominal, "#1f77b4", "nominal"},
-                        {&r.corrected, "#d62728", "corrected"}},
-                  spans, "level [mm]", split);
-    s << svg_plot(r.t, {{&before, "#1f77b4", "residual, nominal"}, {&after, "#d62728", "residual, corrected"}}, spans,
-                  "residual [mm]", split);
-  }
-  s << "<p>Shaded: windows where the nominal residual is largest. Data and plots are inline; the page needs no "
-       "network.</p></body></html>\n";
+  s << "<h2 id='figures'>Recorded level, models and residuals</h2>";
+  for (const auto& figure : report_figures(d)) s << plot::render_svg(figure) << '\n';
+  s << "<p>Data and plots are inline; the page needs no network.</p></body></html>\n";
   return s.str();
 }
 

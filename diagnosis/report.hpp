@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "diagnosis/diagnose.hpp"
+#include "plot/figure.hpp"
 
 namespace canalsim::diagnosis {
 
@@ -16,8 +17,14 @@ namespace canalsim::diagnosis {
 // noise figures. Series are left out (they are in the HTML report).
 nlohmann::json to_json(const Diagnosis& diagnosis);
 
-// One HTML page: verdict, ranked table, per recording the recorded / nominal / corrected primary
-// level and the residual before and after, with the mismatch windows shaded.
+// The report's figures, each named for its standalone file (RECORDING_levels_and_residual,
+// RECORDING_residual_autocorrelation, RECORDING_step_zoom): per recording the recorded primary level
+// against the nominal and the corrected model with the residuals [mm] below (the mismatch windows
+// shaded when the verdict is not `none`), the residuals' autocorrelation with the 95 % band, and the
+// response to the largest command change.
+std::vector<plot::Figure> report_figures(const Diagnosis& diagnosis);
+
+// One HTML page: verdict, ranked table, where the mismatch lives, and report_figures inline.
 std::string html_report(const Diagnosis& diagnosis, const std::string& title);
 
 // A text summary for the terminal (verdict, ranked table, location).

@@ -44,19 +44,6 @@ Status ResidualTestOptions::validate() const {
   return check.status();
 }
 
-std::vector<double> autocorrelation(const std::vector<double>& e, int max_lag) {
-  const std::vector<double> x = centred(e);
-  const double r0 = sum_squares(x);
-  std::vector<double> r(static_cast<std::size_t>(std::max(max_lag, 0)) + 1, 0.0);
-  if (r0 <= 0.0) return r;
-  for (std::size_t k = 0; k < r.size() && k < x.size(); ++k) {
-    double s = 0.0;
-    for (std::size_t t = 0; t + k < x.size(); ++t) s += x[t] * x[t + k];
-    r[k] = s / r0;
-  }
-  return r;
-}
-
 std::vector<double> cross_correlation(const std::vector<double>& u, const std::vector<double>& e,
                                       int max_lag) {
   if (u.size() != e.size()) throw std::invalid_argument("cross_correlation: input and residual lengths differ");

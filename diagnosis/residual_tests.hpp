@@ -11,6 +11,8 @@
 // exceeds with probability 5% (so "one lag of 25 outside" is not a failure).
 #pragma once
 
+#include "core/statistics.hpp"
+
 #include "core/status.hpp"
 
 #include <string>
@@ -42,8 +44,9 @@ struct ResidualTests {
   bool uncorrelated() const { return cross_correlation.pass; }
 };
 
-// r_e(k) for k = 0..max_lag (r_e(0) = 1; all zero for a constant series).
-std::vector<double> autocorrelation(const std::vector<double>& e, int max_lag);
+// r_e(k) for k = 0..max_lag (r_e(0) = 1; all zero for a constant series): core's, which the
+// report's autocorrelation plots use too.
+using canalsim::autocorrelation;
 // r_ue(k) for k = -max_lag..max_lag (index k + max_lag). Lengths must match.
 std::vector<double> cross_correlation(const std::vector<double>& u, const std::vector<double>& e,
                                       int max_lag);

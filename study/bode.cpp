@@ -7,6 +7,7 @@
 #include "core/format.hpp"
 #include "core/html.hpp"
 #include "linearize/linearize.hpp"
+#include "plot/composites.hpp"
 #include "reduced_models/frequency.hpp"
 
 namespace canalsim::study {
@@ -32,45 +33,10 @@ double rms_relative(const std::vector<Complex>& model, const std::vector<Complex
 
 std::string percent(double fraction) { return format_fixed(100.0 * fraction, 1) + " %"; }
 
-// One SVG panel: curves y(log ω) scaled into a 640 x 220 box with the band's ends on the axis.
-std::string svg_panel(const std::vector<double>& omega, const std::vector<std::vector<double>>& curves,
-                      const std::string& y_label) {
-  const char* colours[] = {"#000000", "#1f77b4", "#d62728"};
-  double lo = INFINITY, hi = -INFINITY;
-  for (const auto& c : curves) {
-    for (double v : c) {
-      if (!std::isfinite(v)) continue;
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-  }
-  if (!(hi > lo)) hi = lo + 1.0;
-  const double w = 640, h = 220, left = 60, bottom = 30;
-  const double x0 = std::log10(omega.front()), x1 = std::log10(omega.back());
-  auto px = [&](double om) { return left + (w - left - 10) * (std::log10(om) - x0) / (x1 - x0); };
-  auto py = [&](double v) { return 10 + (h - bottom - 10) * (hi - v) / (hi - lo); };
-  std::ostringstream svg;
-  svg << "<svg width=\"" << w << "\" height=\"" << h << "\" xmlns=\"http://www.w3.org/2000/svg\">"
-      << "<rect x=\"" << left << "\" y=\"10\" width=\"" << w - left - 10 << "\" height=\"" << h - bottom - 10
-      << "\" fill=\"none\" stroke=\"#999\"/>";
-  for (int decade = static_cast<int>(std::ceil(x0)); decade <= static_cast<int>(std::floor(x1)); ++decade) {
-    const double x = px(std::pow(10.0, decade));
-    svg << "<line x1=\"" << x << "\" y1=\"10\" x2=\"" << x << "\" y2=\"" << h - bottom << "\" stroke=\"#ddd\"/>"
-        << "<text x=\"" << x << "\" y=\"" << h - 12 << "\" font-size=\"11\" text-anchor=\"middle\">1e"
-        << decade << "</text>";
-  }
-  svg << "<text x=\"4\" y=\"14\" font-size=\"11\">" << format_g(hi, 3) << "</text><text x=\"4\" y=\""
-      << h - bottom << "\" font-size=\"11\">" << format_g(lo, 3) << "</text><text x=\"4\" y=\"" << h / 2
-      << "\" font-size=\"11\">" << html::escape(y_label) << "</text>";
-  for (std::size_t c = 0; c < curves.size(); ++c) {
-    svg << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[c % 3] << "\" points=\"";
-    for (std::size_t k = 0; k < omega.size(); ++k) {
-      if (std::isfinite(curves[c][k])) svg << format_g(px(omega[k]), 5) << "," << format_g(py(curves[c][k]), 5) << " ";
-    }
-    svg << "\"/>";
-  }
-  svg << "</svg>";
-  return svg.str();
+std::vector<double> gain_db(const std::vector<Complex>& g) {
+  std::vector<double> out;
+  for (const auto& v : g) out.push_back(20.0 * std::log10(std::abs(v)));
+  return out;
 }
 
 }  // namespace
@@ -178,30 +144,33 @@ std::string bode_markdown(const std::vector<BodeSection>& sections) {
 
 std::string bode_html(const std::vector<BodeSection>& sections) {
   return "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Bode: the linearised pool and the fitted "
-         "models</title></head><body style=\"font-family:sans-serif;max-width:700px\">" +
+         "models</title></head><body style=\"font-family:sans-serif;max-width:1000px;margin:1em auto\">" +
          bode_html_section(sections, "h1", "h2") + "</body></html>\n";
+}
+
+std::vector<plot::Figure> bode_figures(const std::vector<BodeSection>& sections) {
+  std::vector<plot::Figure> figures;
+  for (const auto& b : sections) {
+    figures.push_back(plot::bode_figure(
+        "bode_" + plot::file_stem(b.experiment),
+        "Gate → y_dwe at " + b.experiment + " (" + format_g(b.operating_opening_mm, 3) + " mm), over the PRBS band", b.omega,
+        {{"PDE", gain_db(b.pde), linearize::unwrapped_phase_degrees(b.pde), "PDE (linearised pool)"},
+         {"LIOM", gain_db(b.liom), linearize::unwrapped_phase_degrees(b.liom), "LIOM fitted to the recording"},
+         {"LFOM", gain_db(b.lfom), linearize::unwrapped_phase_degrees(b.lfom), "LFOM fitted to the recording"}}));
+  }
+  return figures;
 }
 
 std::string bode_html_section(const std::vector<BodeSection>& sections, const std::string& title_tag,
                               const std::string& point_tag) {
   std::ostringstream page;
-  page << "<" << title_tag << ">Bode: the linearised pool against the fitted LIOM and LFOM</" << title_tag << "><p>Gate → y_dwe in mm/mm over each "
-          "experiment's PRBS band (docs/linearization.md). <span style=\"color:#000\">PDE (linearised)</span>, "
-          "<span style=\"color:#1f77b4\">LIOM</span>, <span style=\"color:#d62728\">LFOM</span> fitted to the "
-          "recording.</p>";
-  for (const auto& b : sections) {
-    auto db = [](const std::vector<Complex>& g) {
-      std::vector<double> out;
-      for (const auto& v : g) out.push_back(20.0 * std::log10(std::abs(v)));
-      return out;
-    };
+  page << "<" << title_tag << " id=\"bode\">Bode: the linearised pool against the fitted LIOM and LFOM</" << title_tag << "><p>Gate → y_dwe in mm/mm over each "
+          "experiment's PRBS band (docs/linearization.md).</p>";
+  const std::vector<plot::Figure> figures = bode_figures(sections);
+  for (std::size_t k = 0; k < sections.size(); ++k) {
+    const BodeSection& b = sections[k];
     page << "<" << point_tag << ">" << html::escape(b.experiment) << " (" << format_g(b.operating_opening_mm, 3)
-         << " mm)</" << point_tag << "><p>"
-         << html::escape(b.sentence) << "</p>"
-         << svg_panel(b.omega, {db(b.pde), db(b.liom), db(b.lfom)}, "dB")
-         << svg_panel(b.omega, {linearize::unwrapped_phase_degrees(b.pde), linearize::unwrapped_phase_degrees(b.liom), linearize::unwrapped_phase_degrees(b.lfom)}, "deg")
-         << "<p style=\"font-size:small\">ω [rad/s], " << format_g(b.band.low, 3) << " to " << format_g(b.band.high, 3)
-         << "</p>";
+         << " mm)</" << point_tag << "><p>" << html::escape(b.sentence) << "</p>" << plot::render_svg(figures[k]) << '\n';
   }
   return page.str();
 }

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "linearize/fractional_fit.hpp"
+#include "plot/figure.hpp"
 #include "scenarios/scenario.hpp"
 #include "study/study.hpp"
 
@@ -41,8 +42,11 @@ std::string fractionality_sentence(const BodeSection& section);
 
 nlohmann::json bode_json(const std::vector<BodeSection>& sections);
 std::string bode_markdown(const std::vector<BodeSection>& sections);
-// A self-contained page: per operating point its sentence and a Bode plot (gain in dB, phase in
-// degrees against log ω) of the PDE, the LIOM and the LFOM, drawn as inline SVG (no script).
+// Per operating point a Bode plot (gain in dB above phase in degrees, against ω on a log axis) of
+// the PDE, the LIOM and the LFOM, named bode_EXPERIMENT for its standalone file.
+std::vector<plot::Figure> bode_figures(const std::vector<BodeSection>& sections);
+// A self-contained page: per operating point its sentence and its bode_figures plot, inline SVG
+// (no script).
 std::string bode_html(const std::vector<BodeSection>& sections);
 // The same content as a section of another page (report.html's Bode section), under a heading
 // `title_tag` with one `point_tag` heading per operating point.

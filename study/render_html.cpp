@@ -1,27 +1,27 @@
-// report.html: the tables, the claims and the figures, self-contained (data and plotting code
-// inline; no network). The plotting code is study/report.js.
+// report.html: the tables, the claims and the figures, self-contained (the figures inline as SVG,
+// drawn by plot/; no script, no network).
 #include "study/render.hpp"
 
 #include <cmath>
 #include <sstream>
 
+#include "core/format.hpp"
 #include "core/html.hpp"
+#include "plot/composites.hpp"
+#include "plot/palette.hpp"
 #include "study/text.hpp"
 
 namespace canalsim::study {
 
 using namespace canalsim::reduced;
 
-extern const char* const kReportScript;  // study/report.js, embedded at configure time
-
 namespace {
 
 // Every k-th sample so that at most `points` remain (0 = all).
-std::vector<double> thin(const std::vector<double>& v, std::size_t points, int digits = 3) {
+std::vector<double> thin(const std::vector<double>& v, std::size_t points) {
   const std::size_t step = (points == 0 || v.size() <= points) ? 1 : (v.size() + points - 1) / points;
   std::vector<double> out;
-  const double scale = std::pow(10.0, digits);
-  for (std::size_t i = 0; i < v.size(); i += step) out.push_back(std::round(v[i] * scale) / scale);
+  for (std::size_t i = 0; i < v.size(); i += step) out.push_back(v[i]);
   return out;
 }
 
@@ -34,13 +34,10 @@ table{border-collapse:collapse;margin:.5em 0 1em;font-size:90%}
 td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
 th{background:#f3f3f3} td:first-child{text-align:left}
 .holds{color:#17692b}.fails{color:#a3141c}.why{color:#333;font-size:92%}
-.plot{margin:.5em 0 1.5em} .plot svg{background:#fff;border:1px solid #ddd}
-.legend span{margin-right:1em;font-size:85%}
+.plot{margin:.5em 0 1.5em} .plot svg{background:#fff;border:1px solid #ddd;display:block}
 small{color:#666}
 </style></head><body>
 )html";
-
-// Plotting code: chart(id, spec) draws line series (x, y arrays) as inline SVG.
 
 // Markdown table lines (| a | b |) to an HTML table, other lines to paragraphs/lists/headings.
 std::string markdown_to_html(const std::string& md) {
@@ -123,21 +120,18 @@ std::string markdown_to_html(const std::string& md) {
   return out.str();
 }
 
-nlohmann::json series(const std::string& name, const std::vector<double>& x, const std::vector<double>& y,
-                      std::size_t points, const std::string& color = "") {
-  nlohmann::json s = {{"name", name}, {"x", thin(x, points, 3)}, {"y", thin(y, points, 3)}};
-  if (!color.empty()) s["color"] = color;
-  return s;
-}
-
-}  // namespace
-
-std::string to_html(const StudyResult& r, const std::map<std::string, Recording>& recordings,
-                    const StudyOptions& options, const std::string& extra_section) {
-  const std::size_t points = options.plot_points;
-  nlohmann::json data;
-  // Recorded vs model responses: fitted models at op1–op4, nominal models at the validation points.
-  data["responses"] = nlohmann::json::array();
+// Recorded and model responses: at each operating point fitted in a table, the models fitted there;
+// at each validation point, the nominal models. One panel per model (small multiples).
+std::vector<plot::Figure> response_figures(const StudyResult& r, const std::map<std::string, Recording>& recordings,
+                                           std::size_t points) {
+  std::vector<plot::Figure> figures;
+  const auto comparison = [&](const std::string& op) {
+    const auto& rec = recordings.at(op);
+    plot::Comparison c;
+    c.t = thin(rec.column(columns::time), points);
+    c.measured = {"recorded", thin(rec.column(columns::level_downstream_end), points), "recorded y_dwe"};
+    return c;
+  };
   std::vector<std::string> fit_ops;
   for (const auto& t : r.tables) {
     for (const auto& op : t.spec.experiments) {
@@ -145,100 +139,188 @@ std::string to_html(const StudyResult& r, const std::map<std::string, Recording>
     }
   }
   for (const auto& op : fit_ops) {
-    const auto& rec = recordings.at(op);
-    const auto& t_s = rec.column(columns::time);
-    nlohmann::json plot;
-    plot["title"] = "Recorded and fitted responses at " + op + " (" + rec.meta("operating_opening_mm", "?") +
-                    " mm)";
-    plot["series"].push_back(series("recorded y_dwe", t_s, rec.column(columns::level_downstream_end), points, "#222"));
+    plot::Comparison c = comparison(op);
+    c.name = "responses_" + plot::file_stem(op);
+    c.title = "Recorded and fitted responses at " + op + " (" + recordings.at(op).meta("operating_opening_mm", "?") + " mm)";
     for (const auto& t : r.tables) {
       const auto it = std::find(t.spec.experiments.begin(), t.spec.experiments.end(), op);
       if (it == t.spec.experiments.end()) continue;
       const auto k = static_cast<std::size_t>(it - t.spec.experiments.begin());
-      plot["series"].push_back(series(upper_name(t.spec.kind) + " (Nrmse " + format_fixed(t.fits[k].nrmse.front(), 1) + " %)",
-                                      t_s, t.fits[k].response.front(), points));
+      c.models.push_back({upper_name(t.spec.kind), thin(t.fits[k].response.front(), points),
+                          upper_name(t.spec.kind) + ", Nrmse " + format_fixed(t.fits[k].nrmse.front(), 1) + " %"});
     }
-    data["responses"].push_back(plot);
+    figures.push_back(plot::small_multiples(c));
   }
   for (const auto* v : {&r.table5, &r.table8}) {
     for (std::size_t row = 0; row < v->experiments.size(); ++row) {
       const auto& op = v->experiments[row];
-      const auto& rec = recordings.at(op);
-      const auto& t_s = rec.column(columns::time);
-      nlohmann::json plot;
-      plot["title"] = "Validation of the nominal models at " + op + " (paper " + v->paper_experiments[row] + ", " +
-                      rec.meta("operating_opening_mm", "?") + " mm)";
-      plot["series"].push_back(series("recorded y_dwe", t_s, rec.column(columns::level_downstream_end), points, "#222"));
+      plot::Comparison c = comparison(op);
+      c.name = "validation_" + plot::file_stem(op);
+      c.title = "Validation of the nominal models at " + op + " (paper " + v->paper_experiments[row] + ", " +
+                recordings.at(op).meta("operating_opening_mm", "?") + " mm)";
       for (std::size_t m = 0; m < v->models.size(); ++m) {
-        plot["series"].push_back(series(v->models[m] + " nominal (Nrmse " + format_fixed(v->results[row][m].nrmse, 1) + " %)",
-                                        t_s, v->results[row][m].response, points));
+        c.models.push_back({v->models[m], thin(v->results[row][m].response, points),
+                            v->models[m] + " nominal, Nrmse " + format_fixed(v->results[row][m].nrmse, 1) + " %"});
       }
-      data["responses"].push_back(plot);
+      figures.push_back(plot::small_multiples(c));
     }
   }
-  // Nrmse against γ (Figures 8 and 10).
-  data["gamma"] = nlohmann::json::array();
+  return figures;
+}
+
+// Nrmse against γ (Figures 8 and 10): one figure per table swept, the best γ of each curve dotted.
+std::vector<plot::Figure> gamma_figures(const StudyResult& r) {
+  std::vector<plot::Figure> figures;
   for (const auto& t : r.tables) {
-    if (t.sweeps.empty()) continue;
-    nlohmann::json g;
-    g["title"] = "Nrmse against γ, " + upper_name(t.spec.kind) + " (dots: best γ)";
-    double ymin = 1e300;
-    for (std::size_t k = 0; k < t.sweeps.size(); ++k) {
-      auto s = series(t.spec.experiments[k] + " (best γ " + format_fixed(t.sweeps[k].gamma[t.sweeps[k].best], 2) + ")",
-                      t.sweeps[k].gamma, t.sweeps[k].nrmse, 0);
-      s["mark"] = t.sweeps[k].best;
-      g["series"].push_back(s);
-      ymin = std::min(ymin, t.sweeps[k].nrmse[t.sweeps[k].best]);
+    if (t.sweeps.empty() || !t.nominal_sweep) continue;
+    plot::Figure f;
+    f.name = "gamma_" + plot::file_stem(upper_name(t.spec.kind));
+    f.title = "Nrmse against γ, " + upper_name(t.spec.kind) + " (dots: best γ)";
+    f.panel_height = 230.0;
+    plot::Panel p;
+    p.x = plot::Axis{"γ", ""};
+    p.x.extend_to_ticks = false;
+    p.y = plot::Axis{"Nrmse", "%"};
+    double best = INFINITY;
+    const auto add = [&](const GammaSweep& sweep, const std::string& name, const std::string& label, std::size_t index) {
+      plot::Series s;
+      s.label = label + " (best γ " + format_fixed(sweep.gamma[sweep.best], 2) + ")";
+      s.colour = plot::series_colour(name, index);
+      s.x = sweep.gamma;
+      s.y = sweep.nrmse;
+      s.marks = {sweep.best};
+      best = std::min(best, sweep.nrmse[sweep.best]);
+      return s;
+    };
+    for (std::size_t k = 0; k < t.sweeps.size(); ++k) p.series.push_back(add(t.sweeps[k], t.spec.experiments[k], t.spec.experiments[k], k));
+    plot::Series nominal = add(*t.nominal_sweep, "nominal", "nominal", 0);
+    nominal.dashed = true;
+    p.series.push_back(std::move(nominal));
+    // Fits that collapse at low γ would squash the interesting part: 40 points below the best at most.
+    double lowest = INFINITY;
+    for (const auto& s : p.series) {
+      for (const double v : s.y) lowest = std::min(lowest, v);
     }
-    auto s = series("nominal (best γ " + format_fixed(t.nominal_sweep->gamma[t.nominal_sweep->best], 2) + ")",
-                    t.nominal_sweep->gamma, t.nominal_sweep->nrmse, 0);
-    s["mark"] = t.nominal_sweep->best;
-    s["dash"] = "5 3";
-    g["series"].push_back(s);
-    g["ymin"] = ymin - 40.0;  // keep the interesting part visible when low γ fits collapse
-    data["gamma"].push_back(g);
+    if (lowest < best - 40.0) p.y.low = std::floor((best - 40.0) / 10.0) * 10.0;
+    f.panels.push_back(std::move(p));
+    figures.push_back(std::move(f));
   }
-  // Flow regimes (Figure 6).
-  data["regimes"] = nlohmann::json::array();
+  return figures;
+}
+
+// Flow regimes (Figure 6): y_up against the free-flow limit y_lc (eq. 23), and y_dwe.
+std::vector<plot::Figure> regime_figures(const StudyResult& r, const std::map<std::string, Recording>& recordings,
+                                         std::size_t points) {
+  std::vector<plot::Figure> figures;
   for (const auto& reg : r.regimes) {
     const auto& rec = recordings.at(reg.experiment);
     if (!rec.has(columns::upstream_level) || !rec.has(columns::gate_position)) continue;
-    const auto& t_s = rec.column(columns::time);
     const auto& y_dwe = rec.column(columns::level_downstream_end);
     const auto& x_up = rec.column(columns::gate_position);
     std::vector<double> y_lc(rec.size());
     for (std::size_t k = 0; k < rec.size(); ++k) y_lc[k] = free_flow_limit_mm(y_dwe[k], x_up[k]);
-    nlohmann::json f;
-    f["title"] = "Flow condition at " + reg.experiment + " (" + format_fixed(reg.operating_opening_mm, 0) +
-                 " mm): free flow on " + format_fixed(100.0 * reg.free_fraction, 1) + " % of the samples";
-    f["series"].push_back(series("y_up", t_s, rec.column(columns::upstream_level), points, "#1f77b4"));
-    f["series"].push_back(series("y_lc (eq. 23)", t_s, y_lc, points, "#d62728"));
-    f["series"].push_back(series("y_dwe", t_s, y_dwe, points, "#222"));
-    data["regimes"].push_back(f);
+    plot::Figure f;
+    f.name = "flow_regime_" + plot::file_stem(reg.experiment);
+    f.title = "Flow condition at " + reg.experiment + " (" + format_fixed(reg.operating_opening_mm, 0) + " mm): free flow on " +
+              format_fixed(100.0 * reg.free_fraction, 1) + " % of the samples";
+    f.panel_height = 200.0;
+    plot::Panel p;
+    p.x = plot::Axis{"t", "s"};
+    p.x.extend_to_ticks = false;
+    p.x.ticks = 8;
+    p.y = plot::Axis{"level", "mm"};
+    const std::vector<double> t = thin(rec.column(columns::time), points);
+    const auto add = [&](const std::string& name, const std::string& label, const std::vector<double>& y, std::size_t index) {
+      plot::Series s;
+      s.label = label;
+      s.colour = plot::series_colour(name, index);
+      s.x = t;
+      s.y = thin(y, points);
+      p.series.push_back(std::move(s));
+    };
+    add("y_up", "y_up", rec.column(columns::upstream_level), 0);
+    add("y_lc", "y_lc (eq. 23)", y_lc, 1);
+    add("recorded", "y_dwe", y_dwe, 0);
+    f.panels.push_back(std::move(p));
+    figures.push_back(std::move(f));
   }
-  double peak = 0.0;
-  for (double v : r.spectrum.envelope) peak = std::max(peak, v);
-  data["spectrum"] = {{"omega", thin(r.spectrum.omega, 0, 4)},
-                      {"magnitude", thin(r.spectrum.magnitude, 0, 4)},
-                      {"envelope", thin(r.spectrum.envelope, 0, 4)},
-                      {"step", thin(r.spectrum.step, 0, 4)},
-                      {"peak", peak}};
+  return figures;
+}
 
+// The PRBS spectrum (Figure 4): the lines of the recorded command, the envelope, a unit step's
+// 1/ω and the half-power level that defines the bandwidth.
+plot::Figure spectrum_figure(const StudyResult& r) {
+  plot::Figure f;
+  f.name = "prbs_spectrum";
+  f.title = "Magnitude of the Fourier transform of a unit-amplitude PRBS and of a unit step";
+  f.panel_height = 260.0;
+  plot::Panel p;
+  p.x = plot::Axis{"ω", "rad/s"};
+  p.x.extend_to_ticks = false;
+  p.x.ticks = 8;
+  p.y = plot::Axis{"|F(ω)|", ""};
+  p.y.scale = plot::Scale::log;
+  // Three decades below the envelope's peak: the sinc's zeros would stretch the axis to 1e-16.
+  double peak = 0.0;
+  for (const double v : r.spectrum.envelope) peak = std::max(peak, v);
+  if (peak > 0.0) p.y.low = std::pow(10.0, std::floor(std::log10(peak * 1e-3)));
+  const auto add = [&](const std::string& label, const std::string& colour, plot::Style style, const std::vector<double>& x,
+                       const std::vector<double>& y) {
+    plot::Series s;
+    s.label = label;
+    s.colour = colour;
+    s.style = style;
+    s.x = x;
+    s.y = y;
+    p.series.push_back(std::move(s));
+    return &p.series.back();
+  };
+  // The command's lines in the command's colour, the envelope dark over them.
+  add("PRBS lines (recorded command)", plot::series_colour("command"), plot::Style::stems, r.spectrum.omega, r.spectrum.magnitude)
+      ->width = 0.6;
+  add("envelope Tc √(N+1) |sinc|", plot::series_colour("recorded"), plot::Style::line, r.spectrum.omega, r.spectrum.envelope);
+  add("unit step 1/ω", plot::series_colour("step", 3), plot::Style::line, r.spectrum.omega, r.spectrum.step);
+  if (!r.spectrum.omega.empty()) {
+    add("envelope max/√2 (−3 dB)", plot::series_colour("half power", 0), plot::Style::line, {r.spectrum.omega.front(), r.spectrum.omega.back()},
+        {peak / std::sqrt(2.0), peak / std::sqrt(2.0)})->dashed = true;
+  }
+  f.panels.push_back(std::move(p));
+  return f;
+}
+
+std::string figures_html(const std::vector<plot::Figure>& figures) {
+  std::string out;
+  for (const auto& f : figures) out += "<div class=\"plot\">" + plot::render_svg(f) + "</div>\n";
+  return out;
+}
+
+}  // namespace
+
+std::vector<plot::Figure> report_figures(const StudyResult& r, const std::map<std::string, Recording>& recordings,
+                                         const StudyOptions& options) {
+  std::vector<plot::Figure> figures = response_figures(r, recordings, options.plot_points);
+  const auto append = [&](std::vector<plot::Figure> more) {
+    for (auto& f : more) figures.push_back(std::move(f));
+  };
+  append(gamma_figures(r));
+  append(regime_figures(r, recordings, options.plot_points));
+  figures.push_back(spectrum_figure(r));
+  return figures;
+}
+
+std::string to_html(const StudyResult& r, const std::map<std::string, Recording>& recordings,
+                    const StudyOptions& options, const std::string& extra_section) {
   std::ostringstream html;
   html << kHtmlHead << markdown_to_html(to_markdown(r))
-       << "<h2>Recorded and model responses</h2><div id=\"responses\"></div>\n"
-       << "<h2>Nrmse against γ (Figures 8 and 10)</h2><div id=\"gamma\"></div>\n"
-       << "<h2>Flow regimes (Figure 6): y_up, y_lc = 0.81 y_dwe (y_dwe/x_up)^0.72, y_dwe</h2>"
+       << "<h2 id=\"responses\">Recorded and model responses</h2>\n" << figures_html(response_figures(r, recordings, options.plot_points))
+       << "<h2 id=\"gamma\">Nrmse against γ (Figures 8 and 10)</h2>\n" << figures_html(gamma_figures(r))
+       << "<h2 id=\"regimes\">Flow regimes (Figure 6): y_up, y_lc = 0.81 y_dwe (y_dwe/x_up)^0.72, y_dwe</h2>"
           "<p><small>Free flow where y_up &gt; y_lc (condition 8), submerged where y_up &lt; y_lc "
-          "(condition 10).</small></p><div id=\"regimes\"></div>\n"
-       << "<h2>PRBS spectrum (Figure 4)</h2><p><small>Design half-power bandwidth "
+          "(condition 10).</small></p>\n" << figures_html(regime_figures(r, recordings, options.plot_points))
+       << "<h2 id=\"spectrum\">PRBS spectrum (Figure 4)</h2><p><small>Design half-power bandwidth "
        << format_fixed(r.spectrum.bandwidth_design_rad_s, 3) << " rad/s, measured " << format_fixed(r.spectrum.bandwidth_measured_rad_s, 3)
-       << " rad/s, paper 5.58 rad/s.</small></p><div id=\"spectrum\"></div>\n"
-       << extra_section << "<script>\nconst DATA = ";
-  std::string json = data.dump();
-  // Keep "</script>" out of the inline data.
-  for (std::size_t p = json.find("</"); p != std::string::npos; p = json.find("</", p + 2)) json.replace(p, 2, "<\\/");
-  html << json << ";\n" << kReportScript << "</script>\n</body></html>\n";
+       << " rad/s, paper 5.58 rad/s.</small></p>\n" << figures_html({spectrum_figure(r)})
+       << extra_section << "</body></html>\n";
   return html.str();
 }
 

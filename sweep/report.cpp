@@ -7,9 +7,10 @@
 
 #include "core/format.hpp"
 #include "core/html.hpp"
+#include "plot/figure.hpp"
+#include "plot/palette.hpp"
 #include "sweep/cases.hpp"
 #include "sweep/compute.hpp"
-#include "sweep/plot.hpp"
 #include "sweep/table.hpp"
 
 namespace canalsim::sweep {
@@ -116,18 +117,33 @@ std::string lambda_plots(const SweepFile& sweep, const ParsedTable& table) {
     s << "<p>No λ was computed: add \"LFOM\" to compute.fit or set compute.linearize = true.</p>\n";
     return s.str();
   }
-  s << "<p>" << (lfom.empty() ? "" : "<span style='color:#1f77b4'>●</span> LFOM fitted to the case's recording (column " + fitted + ")")
-    << (!lfom.empty() && !band.empty() ? "; " : "")
-    << (band.empty() ? "" : "<span style='color:#d62728'>●</span> LFOM fitted to the linearised pool's response over the "
-                            "PRBS band (column " + linearised + ")")
-    << ". λ = 1 is a first-order lag; below 1, fractional.</p>\n<div class='plots'>\n";
+  s << "<p>The LFOM fitted to each case's recording (column " << fitted << ") and to the linearised pool's response over the "
+       "PRBS band (column " << linearised << "). λ = 1 is a first-order lag; below 1, fractional.</p>\n<div class='plots'>\n";
+  // Small multiples: one panel per swept key, all on the same λ axis.
+  plot::Figure figure;
+  figure.name = "sweep_lambda";
+  figure.columns = static_cast<int>(std::clamp<std::size_t>(sweep.vary.size(), 1, 3));
+  figure.panel_height = 190.0;
   for (const auto& v : sweep.vary) {
+    plot::Panel p;
+    p.x = plot::Axis{v.key, ""};
+    p.x.scale = v.logarithmic ? plot::Scale::log : plot::Scale::linear;
+    p.y = plot::Axis{"λ", ""};
     const std::vector<double> x = table.numbers(v.key);
-    std::vector<ScatterSeries> series;
-    if (!lfom.empty()) series.push_back({"LFOM fit", "#1f77b4", x, lfom});
-    if (!band.empty()) series.push_back({"linearised", "#d62728", x, band});
-    s << scatter_svg(series, v.key, "λ", v.logarithmic) << "\n";
+    const auto add = [&](const std::string& name, const std::string& label, const std::vector<double>& y) {
+      plot::Series series;
+      series.label = label;
+      series.colour = plot::series_colour(name);
+      series.style = plot::Style::scatter;
+      series.x = x;
+      series.y = y;
+      p.series.push_back(std::move(series));
+    };
+    if (!lfom.empty()) add("LFOM", "LFOM fitted to the recording", lfom);
+    if (!band.empty()) add("PDE", "LFOM fitted to the linearised pool", band);
+    figure.panels.push_back(std::move(p));
   }
+  s << plot::render_svg(figure) << "\n";
   s << "</div>\n";
   return s.str();
 }

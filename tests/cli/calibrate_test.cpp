@@ -2,6 +2,7 @@
 // existing output alone).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 
 #include "testing/cli_run.hpp"
@@ -56,7 +57,7 @@ TEST(Calibrate, WritesAScenarioThatSimulateReadsWithEachValueAndItsStd) {
   const fs::path scratch = scratch_dir("calibrate_ok");
   const fs::path rec = lab_recording(scratch);
   const RunResult r = run_canalsim("calibrate --scenario lab " + rec.string() +
-                                       " -o cal.toml --params manning_n --starts 1 --json cal.json --report cal.html",
+                                       " -o cal.toml --params manning_n --starts 1 --json cal.json --report cal.html --plots-dir plots",
                                    scratch);
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string toml = read_text(scratch / "cal.toml");
@@ -64,6 +65,16 @@ TEST(Calibrate, WritesAScenarioThatSimulateReadsWithEachValueAndItsStd) {
   EXPECT_NE(toml.find("# calibrated: manning_n = "), std::string::npos) << toml;
   EXPECT_NE(toml.find("±"), std::string::npos);
   EXPECT_NE(read_text(scratch / "cal.html").find("<svg"), std::string::npos);
+  EXPECT_NE(read_text(scratch / "cal.html").find(">residual [mm]<"), std::string::npos);
+  // Every figure of the report also as a file: the level and residual, the residual's
+  // autocorrelation, the step zoom and the residual's spectrum of op3's y_dwe.
+  std::vector<std::string> plots;
+  for (const auto& e : fs::directory_iterator(scratch / "plots")) plots.push_back(e.path().filename().string());
+  for (const std::string kind : {"levels_and_residual", "residual_autocorrelation", "step_zoom", "residual_spectrum"}) {
+    EXPECT_TRUE(std::any_of(plots.begin(), plots.end(), [&](const std::string& n) {
+      return n.find("y_dwe_mm_" + kind + ".svg") != std::string::npos;
+    })) << kind;
+  }
   // The grid-converged estimate (docs/calibration.md, step 5) beside the model's own.
   EXPECT_NE(r.out.find("converged"), std::string::npos) << r.out;
   EXPECT_NE(toml.find("; grid-converged "), std::string::npos) << toml;

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include "plot/palette.hpp"
+#include "testing/svg_checks.hpp"
+
 namespace canalsim::diagnosis {
 namespace {
 
@@ -61,6 +64,44 @@ TEST(Report, HtmlIsOneSelfContainedPage) {
   EXPECT_EQ(html.find("<script src"), std::string::npos);
   EXPECT_EQ(html.find("<link"), std::string::npos);
   EXPECT_EQ(html.find("https:"), std::string::npos);
+}
+
+TEST(Report, TheFiguresShowTheMismatchWindowsAndTheCorrectedModel) {
+  const std::vector<plot::Figure> figures = report_figures(sample());
+  ASSERT_EQ(figures.size(), 2u);  // the command never changes: no step zoom
+  EXPECT_EQ(figures[0].name, "op1_csv_levels_and_residual");
+  EXPECT_EQ(figures[1].name, "op1_csv_residual_autocorrelation");
+  EXPECT_EQ(figures[0].panels[0].series.size(), 3u);  // recorded, nominal, corrected
+  EXPECT_EQ(figures[0].panels[1].windows.size(), 1u);
+  EXPECT_EQ(figures[0].panels[1].y.title(), "residual [mm]");
+}
+
+// A clean diagnosis: the model explains the recording, the residual is flat. It must look clean: a
+// calm symmetric range around zero, no shaded windows, no corrected model, no "-0" tick.
+TEST(Report, ACleanDiagnosisLooksClean) {
+  Diagnosis d = sample();
+  d.verdict = "none";
+  for (auto& s : d.series) {
+    s.nominal = s.recorded;
+    s.corrected = s.recorded;
+    s.u[6] = 25;  // one command change
+  }
+  const std::vector<plot::Figure> figures = report_figures(d);
+  ASSERT_EQ(figures.size(), 3u);
+  EXPECT_EQ(figures[2].name, "op1_csv_step_zoom");
+  const plot::Figure& levels = figures[0];
+  EXPECT_EQ(levels.panels[0].series.size(), 2u);  // recorded and nominal
+  EXPECT_TRUE(levels.panels[1].windows.empty());
+  const plot::PanelFrame residual = plot::layout(levels)[1];
+  EXPECT_DOUBLE_EQ(residual.y.low, -0.5);
+  EXPECT_DOUBLE_EQ(residual.y.high, 0.5);
+  EXPECT_EQ(residual.y.ticks, (std::vector<double>{-0.5, 0.0, 0.5}));
+  for (const auto& f : figures) {
+    const std::string svg = plot::render_svg(f);
+    EXPECT_EQ(plot_test::unbalanced_tags(svg), "") << f.name;
+    for (const auto& text : plot_test::text_nodes(svg)) EXPECT_FALSE(plot_test::is_negative_zero(text)) << f.name << ": " << text;
+    EXPECT_EQ(svg.find(plot::kWindowShade), std::string::npos) << f.name;
+  }
 }
 
 TEST(Report, TextSummaryStartsWithTheVerdict) {

@@ -43,7 +43,12 @@ TEST(BodeSection, ThePageDrawsGainAndPhaseForEachOperatingPoint) {
   const std::string page = bode_html({b, b});
   std::size_t svgs = 0;
   for (auto at = page.find("<svg"); at != std::string::npos; at = page.find("<svg", at + 1)) ++svgs;
-  EXPECT_EQ(svgs, 4u);  // gain and phase, two sections
+  EXPECT_EQ(svgs, 2u);  // one figure per section: gain above phase on one ω axis
+  for (const char* text : {">gain [dB]<", ">phase [deg]<", ">ω [rad/s]<", ">PDE (linearised pool)<", ">LIOM fitted to the recording<",
+                           ">LFOM fitted to the recording<", ">0.1<", ">10<"}) {
+    EXPECT_NE(page.find(text), std::string::npos) << text;
+  }
+  EXPECT_EQ(bode_figures({b}).front().name, "bode_op_1_");
   EXPECT_NE(page.find("op&lt;1&gt;"), std::string::npos);
   EXPECT_EQ(page.find("nan"), std::string::npos);
   EXPECT_NE(bode_markdown({b}).find("| 1 | 0.707 | 0.636 | 0.778 | -45 | -45 | -45 |"), std::string::npos)
@@ -51,7 +56,7 @@ TEST(BodeSection, ThePageDrawsGainAndPhaseForEachOperatingPoint) {
   // report.html's Bode section: the same plots, one level down in the heading hierarchy, no page
   // wrapper of its own.
   const std::string part = bode_html_section({b});
-  EXPECT_NE(part.find("<h2>Bode"), std::string::npos);
+  EXPECT_NE(part.find("<h2 id=\"bode\">Bode"), std::string::npos);
   EXPECT_NE(part.find("<h3>op&lt;1&gt;"), std::string::npos);
   EXPECT_NE(part.find("<svg"), std::string::npos);
   EXPECT_EQ(part.find("<body"), std::string::npos);
