@@ -8,6 +8,7 @@
 #include <set>
 
 #include "scenarios/builtin.hpp"
+#include "testing/refusals.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
@@ -159,19 +160,21 @@ TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffec
 }
 
 TEST(Blindtest, InvalidOptionsNameTheField) {
-  BlindtestOptions o;
-  o.trials = 0;
-  EXPECT_NE(o.validate().message().find("trials"), std::string::npos);
-  o = {};
-  o.effects = {"gremlins"};
-  EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
-  o = {};
-  o.realistic = RealisticTruth{};
-  o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
-  EXPECT_NE(o.validate().message().find("realistic.noise_low_mm"), std::string::npos) << o.validate().message();
-  o.realistic->noise_low_mm = 0.03;
-  o.model = ModelDiagnoseOptions{};
-  EXPECT_NE(o.validate().message().find("realistic"), std::string::npos);
+  using testing::refuses;
+  EXPECT_TRUE(refuses<BlindtestOptions>([](auto& o) { o.trials = 0; }, "trials"));
+  EXPECT_TRUE(refuses<BlindtestOptions>([](auto& o) { o.effects = {"gremlins"}; }, "gremlins"));
+  const auto realistic = [](BlindtestOptions& o) {
+    o.realistic = RealisticTruth{};
+    o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
+  };
+  EXPECT_TRUE(refuses<BlindtestOptions>(realistic, "realistic.noise_low_mm"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(
+      [](auto& o) {
+        o.realistic = RealisticTruth{};
+        o.realistic->noise_low_mm = 0.03;
+        o.model = ModelDiagnoseOptions{};
+      },
+      "realistic"));
 }
 
 }  // namespace
