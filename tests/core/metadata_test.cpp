@@ -90,7 +90,7 @@ TEST(Metadata, AValueOutOfRangeAfterItsUnitIsNamed) {
   const Recording r = parse_recording("# y_unit: km\n# y_scale_mm_per_unit: 1e6\nt_s,u_mm,y_dwe_mm\n0,15,50\n"
                                       "0.13,20,2e7\n",
                                       "r.csv");
-  EXPECT_TRUE(testing::refuses_input(
+  EXPECT_TRUE(canalsim::testing::refuses_input(
       [&] { (void)in_millimetres(r); },
       "r.csv:5: column y_dwe_mm: 2e+07 km is 2e+13 mm: expected a magnitude of at most 1e+12 mm"));
 }
