@@ -161,20 +161,21 @@ TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffec
 
 TEST(Blindtest, InvalidOptionsNameTheField) {
   using testing::refuses;
-  EXPECT_TRUE(refuses<BlindtestOptions>([](auto& o) { o.trials = 0; }, "trials"));
-  EXPECT_TRUE(refuses<BlindtestOptions>([](auto& o) { o.effects = {"gremlins"}; }, "gremlins"));
-  const auto realistic = [](BlindtestOptions& o) {
+  const auto no_trials = [](BlindtestOptions& o) { o.trials = 0; };
+  const auto unknown_effect = [](BlindtestOptions& o) { o.effects = {"gremlins"}; };
+  const auto noise_range_reversed = [](BlindtestOptions& o) {
     o.realistic = RealisticTruth{};
     o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
   };
-  EXPECT_TRUE(refuses<BlindtestOptions>(realistic, "realistic.noise_low_mm"));
-  EXPECT_TRUE(refuses<BlindtestOptions>(
-      [](auto& o) {
-        o.realistic = RealisticTruth{};
-        o.realistic->noise_low_mm = 0.03;
-        o.model = ModelDiagnoseOptions{};
-      },
-      "realistic"));
+  const auto realistic_with_a_model = [](BlindtestOptions& o) {
+    o.realistic = RealisticTruth{};
+    o.realistic->noise_low_mm = 0.03;
+    o.model = ModelDiagnoseOptions{};
+  };
+  EXPECT_TRUE(refuses<BlindtestOptions>(no_trials, "trials"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(unknown_effect, "gremlins"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(noise_range_reversed, "realistic.noise_low_mm"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(realistic_with_a_model, "realistic"));
 }
 
 }  // namespace

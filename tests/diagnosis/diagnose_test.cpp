@@ -185,14 +185,15 @@ TEST(Diagnose, MismatchedRecordingsAreNamedWithTheReason) {
 
 TEST(Diagnose, InvalidOptionsNameTheField) {
   using testing::refuses;
-  EXPECT_TRUE(refuses<DiagnoseOptions>([](auto& o) { o.fit_fraction = 1.5; }, "fit_fraction"));
-  EXPECT_TRUE(refuses<DiagnoseOptions>([](auto& o) { o.candidates = {"gremlins"}; }, "gremlins"));
-  EXPECT_TRUE(refuses<DiagnoseOptions>(
-      [](auto& o) {
-        o.primary = "q_lps";
-        o.channels = {"y_dwe_mm"};
-      },
-      "channels"));
+  const auto fraction_above_one = [](DiagnoseOptions& o) { o.fit_fraction = 1.5; };
+  const auto unknown_candidate = [](DiagnoseOptions& o) { o.candidates = {"gremlins"}; };
+  const auto primary_not_compared = [](DiagnoseOptions& o) {
+    o.primary = "q_lps";
+    o.channels = {"y_dwe_mm"};
+  };
+  EXPECT_TRUE(refuses<DiagnoseOptions>(fraction_above_one, "fit_fraction"));
+  EXPECT_TRUE(refuses<DiagnoseOptions>(unknown_candidate, "gremlins"));
+  EXPECT_TRUE(refuses<DiagnoseOptions>(primary_not_compared, "channels"));
 }
 
 }  // namespace
