@@ -234,7 +234,134 @@ bool refinement_follows(ReplayProblem& fit, TwiceTheCells& twice, const Run& run
   }
 }
 
-// One calibration of the scenario's parameters named by `specs` (the recordings checked).
+// The first run from the scenario's values, precisely. A grid that may be refined scouts first:
+// when twice the cells lower the cost at the scout's end by enough that the refinement follows,
+// the refined grid continues from there (its optimum moves by more than this one's last precise
+// iterations would). Measured on the benchmark's truth:1 (bench/README.md), a 100-cell run to
+// the precise tolerance takes 27 iterations (488 simulations) to gain 5.6 % after its third, and
+// the refined grids cut the cost 12-fold; the scout stops after 13 (docs/calibration.md, "The
+// first grid scouts").
+Run first_run(ReplayProblem& fit, TwiceTheCells& twice, const std::vector<double>& z0, const CalibrateOptions& o,
+              const RefinementFollows& follows, bool on_refined_grid, Calibration& c) {
+  const int runs = o.starts;
+  const double tolerance = on_refined_grid ? kRefinedGridTolerance : kPreciseTolerance;
+  const bool scouted = o.grid_check && static_cast<bool>(follows) && !on_refined_grid;
+  Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, scouted ? kScoutTolerance : tolerance,
+                                 /*secant=*/on_refined_grid);
+  c.iterations += best.iterations;
+  const bool refinement_likely = scouted && std::isfinite(best.cost) && refinement_follows(fit, twice, best, follows);
+  if (!refinement_likely && std::isfinite(best.cost) && (scouted || (on_refined_grid && !fit.differenced_at(best.z)))) {
+    // Continued precisely, or, on a refined grid, which starts near its optimum (the coarser
+    // grid's) and simulates at 4x the cost, where secant Jacobians carried the run: ended with
+    // Jacobians by differences, so that its stopping rules and statistics see the true Jacobian.
+    const int left = scouted ? o.max_iterations - best.iterations : o.max_iterations;
+    Run finished = levenberg_marquardt(fit, best.z, left, o.progress, 0, runs, tolerance);
+    c.iterations += finished.iterations;
+    if (finished.cost <= best.cost) best = std::move(finished);
+  }
+  return best;
+}
+
+// The starts after the first (the best of points screened over the bounds): run when the first
+// optimum is doubtful, or always without further_starts_only_when_doubtful; each scouts with a
+// loose tolerance and is continued precisely only when it ends below the best so far (it mostly
+// finds the same optimum, and its tail iterations cost a simulation per hydraulic parameter and
+// recording each). Says in c.starts_note why they ran or did not, and counts them in c.starts.
+void run_further_starts(ReplayProblem& fit, TwiceTheCells& twice, const std::vector<double>& z0,
+                        const CalibrateOptions& o, const RefinementFollows& follows, Run& best, Calibration& c) {
+  std::vector<Run> starts{Run{z0, c.cost_before, 0, "", false}};
+  if (o.starts > 1) {
+    const std::string why = doubt(fit, twice, best, static_cast<bool>(follows));
+    if (!o.further_starts_only_when_doubtful || !why.empty()) {
+      c.starts_note = why.empty() ? "every start run (further_starts_only_when_doubtful off)"
+                                  : "further starts run: " + why;
+      if (o.progress) o.progress({0.5, "screening " + std::to_string(o.screened_points) + " points over the bounds"});
+      std::vector<Run> screened = screened_starts(fit, o.screened_points);
+      for (std::size_t k = 0; k < screened.size() && static_cast<int>(starts.size()) < o.starts; ++k) starts.push_back(screened[k]);
+    } else {
+      const std::string grids = " (the grid's: twice the cells bring it below " + format_g(kDoubtfulCost, 2) + ")";
+      c.starts_note = best.converged
+                          ? "one start: the first optimum converged inside the bounds, every parameter determined, at cost " +
+                                format_g(best.cost, 3) + (best.cost > kDoubtfulCost ? grids : "")
+                          : "one start: the first run stopped at its iteration limit at cost " + format_g(best.cost, 3) +
+                                grids + "; the refined grid continues it";
+    }
+  }
+  for (std::size_t k = 1; k < starts.size(); ++k) {
+    const int run = static_cast<int>(k);
+    Run r = levenberg_marquardt(fit, starts[k].z, o.max_iterations, o.progress, run, o.starts, kScoutTolerance);
+    c.iterations += r.iterations;
+    if (r.cost < best.cost) {
+      r = levenberg_marquardt(fit, r.z, o.max_iterations, o.progress, run, o.starts, kPreciseTolerance);
+      c.iterations += r.iterations;
+    }
+    if (r.cost < best.cost) best = std::move(r);
+  }
+  c.starts = static_cast<int>(starts.size());
+}
+
+// How sure the estimates at the optimum are: the statistical part (parameter_statistics), the
+// numerical part (re-estimates on other numerics, discretisation.hpp) and the grid-converged
+// estimates. A grid that will be refined leaves all of it to the refined one (its estimates are
+// only that one's start): no Jacobian at its optimum, zero spreads.
+struct Uncertainty {
+  std::vector<double> values, converged, numerical;
+  ParameterStatistics stats;
+};
+
+Uncertainty uncertainty_at(ReplayProblem& fit, TwiceTheCells& twice, const Run& best,
+                           const std::vector<Channels>& optimum, const std::vector<double>& r, bool refined_next,
+                           const CalibrateOptions& o, Calibration& c) {
+  const std::vector<Parameter>& parameters = fit.parameters();
+  Uncertainty u;
+  for (std::size_t j = 0; j < parameters.size(); ++j) u.values.push_back(parameters[j].from_search(best.z[j]));
+  u.converged = u.values;
+  u.numerical.assign(parameters.size(), 0.0);
+  u.stats.std.assign(parameters.size(), 0.0);
+  u.stats.sensitivity.assign(parameters.size(), 0.0);
+  if (refined_next) return u;
+  if (o.progress) o.progress({0.91, "statistics at the optimum"});
+  const std::vector<double> J = fit.jacobian(best.z, r);
+  u.stats = parameter_statistics(parameters, best.z, J, r, fit.residual_series(optimum));
+  c.inflation = u.stats.inflation;
+  c.correlation = u.stats.correlation;
+  for (const auto& unidentified : u.stats.unidentified) {
+    c.identifiability.push_back({unidentified.parameters, unidentified.reason, unidentified.determined});
+  }
+  if (o.grid_check) {
+    // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
+    if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
+    c.discretisation = discretisation_shifts(fit, best.z, J, 2, &twice.observed_at(best.z));
+    u.numerical = numerical_uncertainty(c.discretisation, parameters.size());
+    u.converged = grid_converged(parameters, u.values, c.discretisation);
+    for (auto& d : c.discretisation) d.at_optimum.clear();  // the result stays light (diagnosis keeps dozens)
+  }
+  return u;
+}
+
+// Each parameter's estimate: its value, the statistical and numerical spreads combined in
+// quadrature, the grid-converged value, and whether it rests at a bound.
+std::vector<ParameterEstimate> estimates(const std::vector<Parameter>& parameters, const Scenario& scenario,
+                                         const std::vector<double>& z, const Uncertainty& u) {
+  std::vector<ParameterEstimate> out;
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    const Parameter& p = parameters[j];
+    const double grid = u.numerical[j];
+    const double statistical = u.stats.std[j];
+    ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), u.values[j],
+                        std::sqrt(statistical * statistical + grid * grid), statistical, grid, u.converged[j],
+                        p.low, p.high, false, u.stats.sensitivity[j]};
+    const double span = p.to_search(p.high) - p.to_search(p.low);
+    e.at_bound = z[j] <= p.to_search(p.low) + 1e-6 * span || z[j] >= p.to_search(p.high) - 1e-6 * span;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// One calibration of the scenario's parameters named by `specs` (the recordings checked): the
+// nominal replay, the first run, further starts when it is doubtful, the grid check at the
+// optimum, the uncertainty of the estimates, and the fits before and after, on the validation
+// recordings too.
 Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording>& recordings,
                            const std::vector<Recording>& validation, const std::vector<std::string>& specs,
                            const CalibrateOptions& o, const RefinementFollows& follows = {},
@@ -254,63 +381,9 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     const std::vector<double> z0 = fit.start();
     const std::vector<Channels> nominal = fit.predict(z0);
     c.cost_before = cost_per_sample(fit.residuals(nominal));
-    // The scenario's values first, precisely. Further starts (the best of points screened over
-    // the bounds) run when the first optimum is doubtful, or always without
-    // further_starts_only_when_doubtful; each scouts with a loose tolerance and is continued
-    // precisely only when it ends below the best so far (it mostly finds the same optimum, and
-    // its tail iterations cost a simulation per hydraulic parameter and recording each).
-    const int runs = o.starts;
-    const double tolerance = from_coarser ? kRefinedGridTolerance : kPreciseTolerance;
     TwiceTheCells twice(fit);
-    // A grid that may be refined scouts first: when twice the cells lower the cost at the scout's
-    // end by enough that the refinement follows, the refined grid continues from there (its
-    // optimum moves by more than this one's last precise iterations would). Measured on the
-    // benchmark's truth:1 (bench/README.md), a 100-cell run to the precise tolerance takes 27
-    // iterations (488 simulations) to gain 5.6 % after its third, and the refined grids cut the
-    // cost 12-fold; the scout stops after 13 (docs/calibration.md, "The first grid scouts").
-    const bool scouted = o.grid_check && static_cast<bool>(follows) && !from_coarser;
-    Run best = levenberg_marquardt(fit, z0, o.max_iterations, o.progress, 0, runs, scouted ? kScoutTolerance : tolerance,
-                                  /*secant=*/from_coarser != nullptr);
-    c.iterations += best.iterations;
-    const bool refinement_likely = scouted && std::isfinite(best.cost) && refinement_follows(fit, twice, best, follows);
-    if (!refinement_likely && std::isfinite(best.cost) && (scouted || (from_coarser && !fit.differenced_at(best.z)))) {
-      // Continued precisely, or, on a refined grid, which starts near its optimum (the coarser
-      // grid's) and simulates at 4x the cost, where secant Jacobians carried the run: ended with
-      // Jacobians by differences, so that its stopping rules and statistics see the true Jacobian.
-      const int left = scouted ? o.max_iterations - best.iterations : o.max_iterations;
-      Run finished = levenberg_marquardt(fit, best.z, left, o.progress, 0, runs, tolerance);
-      c.iterations += finished.iterations;
-      if (finished.cost <= best.cost) best = std::move(finished);
-    }
-    std::vector<Run> starts{Run{z0, c.cost_before, 0, "", false}};
-    if (o.starts > 1) {
-      const std::string why = doubt(fit, twice, best, static_cast<bool>(follows));
-      if (!o.further_starts_only_when_doubtful || !why.empty()) {
-        c.starts_note = why.empty() ? "every start run (further_starts_only_when_doubtful off)"
-                                    : "further starts run: " + why;
-        if (o.progress) o.progress({0.5, "screening " + std::to_string(o.screened_points) + " points over the bounds"});
-        std::vector<Run> screened = screened_starts(fit, o.screened_points);
-        for (std::size_t k = 0; k < screened.size() && static_cast<int>(starts.size()) < o.starts; ++k) starts.push_back(screened[k]);
-      } else {
-        const std::string grids = " (the grid's: twice the cells bring it below " + format_g(kDoubtfulCost, 2) + ")";
-        c.starts_note = best.converged
-                            ? "one start: the first optimum converged inside the bounds, every parameter determined, at cost " +
-                                  format_g(best.cost, 3) + (best.cost > kDoubtfulCost ? grids : "")
-                            : "one start: the first run stopped at its iteration limit at cost " + format_g(best.cost, 3) +
-                                  grids + "; the refined grid continues it";
-      }
-    }
-    for (std::size_t k = 1; k < starts.size(); ++k) {
-      const int run = static_cast<int>(k);
-      Run r = levenberg_marquardt(fit, starts[k].z, o.max_iterations, o.progress, run, runs, kScoutTolerance);
-      c.iterations += r.iterations;
-      if (r.cost < best.cost) {
-        r = levenberg_marquardt(fit, r.z, o.max_iterations, o.progress, run, runs, kPreciseTolerance);
-        c.iterations += r.iterations;
-      }
-      if (r.cost < best.cost) best = std::move(r);
-    }
-    c.starts = static_cast<int>(starts.size());
+    Run best = first_run(fit, twice, z0, o, follows, from_coarser != nullptr, c);
+    run_further_starts(fit, twice, z0, o, follows, best, c);
     if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");
     const std::vector<Channels> optimum = fit.predict(best.z);
     const std::vector<double> r = fit.residuals(optimum);
@@ -323,41 +396,8 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
       refined_next = follows && follows(c.grid, c.cost_after);
       if (refined_next && to_finer) to_finer->twice_the_cells = twice.truth_at(best.z);
     }
-    // A grid that will be refined leaves its statistics, numerical uncertainty and validation to
-    // the refined one (its estimates are only that one's start): no Jacobian at its optimum.
-    std::vector<double> values;
-    for (std::size_t j = 0; j < parameters.size(); ++j) values.push_back(parameters[j].from_search(best.z[j]));
-    std::vector<double> converged = values;
-    std::vector<double> numerical(parameters.size(), 0.0);
-    ParameterStatistics stats;
-    stats.std.assign(parameters.size(), 0.0);
-    stats.sensitivity.assign(parameters.size(), 0.0);
-    if (!refined_next) {
-      if (o.progress) o.progress({0.91, "statistics at the optimum"});
-      const std::vector<double> J = fit.jacobian(best.z, r);
-      stats = parameter_statistics(parameters, best.z, J, r, fit.residual_series(optimum));
-      c.inflation = stats.inflation;
-      c.correlation = stats.correlation;
-      for (const auto& u : stats.unidentified) c.identifiability.push_back({u.parameters, u.reason, u.determined});
-      if (o.grid_check) {
-        // The numerical uncertainty: how far the estimates move on other numerics (discretisation.hpp).
-        if (o.progress) o.progress({0.92, "numerical uncertainty: re-estimates on other numerics"});
-        c.discretisation = discretisation_shifts(fit, best.z, J, 2, &twice.observed_at(best.z));
-        numerical = numerical_uncertainty(c.discretisation, parameters.size());
-        converged = grid_converged(parameters, values, c.discretisation);
-        for (auto& d : c.discretisation) d.at_optimum.clear();  // the result stays light (diagnosis keeps dozens)
-      }
-    }
-    for (std::size_t j = 0; j < parameters.size(); ++j) {
-      const Parameter& p = parameters[j];
-      const double grid = numerical[j];
-      ParameterEstimate e{p.name, p.unit, p.key, p.key_scale, p.get(scenario), values[j],
-                          std::sqrt(stats.std[j] * stats.std[j] + grid * grid), stats.std[j], grid, converged[j],
-                          p.low, p.high, false, stats.sensitivity[j]};
-      const double span = p.to_search(p.high) - p.to_search(p.low);
-      e.at_bound = best.z[j] <= p.to_search(p.low) + 1e-6 * span || best.z[j] >= p.to_search(p.high) - 1e-6 * span;
-      c.parameters.push_back(e);
-    }
+    const Uncertainty u = uncertainty_at(fit, twice, best, optimum, r, refined_next, o, c);
+    c.parameters = estimates(parameters, scenario, best.z, u);
     c.calibrated = fit.scenario_at(best.z);
     add_fits(fit, nominal, optimum, false, c);
     if (!validation.empty() && !refined_next) {

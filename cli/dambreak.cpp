@@ -101,24 +101,25 @@ void run_dambreak(int cells, double t_end, bool dry, const std::string& output, 
   // Output: the final state and the exact depth at each cell centre.
   const solver::Reach& r = canal.reach(0);
   std::ostringstream csv;
-  csv.precision(10);
   csv << "# problem: " << (dry ? "Ritter dry-bed" : "Stoker wet-bed") << " dam break\n"
-      << "# time_s: " << t_end << "\n# cells: " << cells << "\n"
+      << "# time_s: " << format_g(t_end, 10) << "\n# cells: " << cells << "\n"
       << "x_m,depth_m,discharge_m3s,exact_depth_m\n";
   double l1 = 0.0;
   for (int i = 0; i < cells; ++i) {
     const double x = r.x_centre(i), exact = exact_depth(x, t_end, h_right);
     l1 += std::abs(r.depth(i) - exact) * r.cell_length();
-    csv << x << ',' << r.depth(i) << ',' << r.discharge()[static_cast<std::size_t>(i)] << ',' << exact << '\n';
+    csv << format_g(x, 10) << ',' << format_g(r.depth(i), 10) << ',' << format_g(r.discharge()[static_cast<std::size_t>(i)], 10)
+        << ',' << format_g(exact, 10) << '\n';
   }
   write_file_atomically(output, csv.str());
 
   const solver::VolumeBalance b = canal.total_balance();
-  std::cout << "wrote " << std::filesystem::absolute(output).string() << " (" << cells << " cells, t = " << t_end
+  std::cout << "wrote " << std::filesystem::absolute(output).string() << " (" << cells << " cells, t = " << format_g(t_end)
             << " s, " << canal.statistics().steps << " steps)\n"
-            << "L1 depth error vs exact: " << l1 << " m^2\n"
-            << "volume balance [m^3]: storage change " << b.storage_change() << ", inflow " << b.inflow
-            << ", outflow " << b.outflow << ", error " << b.error() << " (relative " << b.relative_error() << ")\n";
+            << "L1 depth error vs exact: " << format_g(l1) << " m^2\n"
+            << "volume balance [m^3]: storage change " << format_g(b.storage_change()) << ", inflow " << format_g(b.inflow)
+            << ", outflow " << format_g(b.outflow) << ", error " << format_g(b.error()) << " (relative "
+            << format_g(b.relative_error()) << ")\n";
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/format.hpp"
+#include "core/json.hpp"
 #include "linearize/linearize.hpp"
 #include "plot/composites.hpp"
 #include "scenarios/builtin.hpp"
@@ -43,8 +44,6 @@ std::string csv_text(const linearize::FrequencyResponse& r) {
   return out.str();
 }
 
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(format_g(v)); }
-
 std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArguments& args) {
   nlohmann::json j;
   j["scenario"] = args.scenario;
@@ -54,7 +53,7 @@ std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArgu
   j["operating_point"] = r.steady_state;
   j["states"] = r.system.A.rows();
   j["nyquist_rad_s"] = r.system.nyquist;
-  j["static_gain"] = number(r.static_gain);
+  j["static_gain"] = json_number(r.static_gain);
   j["delay_s"] = r.delay_s;
   j["sensor_delay_s"] = r.system.output_delay_s;
   for (const auto& p : r.poles) j["poles"].push_back({{"real", p.real()}, {"imag", p.imag()}});
@@ -67,9 +66,9 @@ std::string json_text(const linearize::FrequencyResponse& r, const LinearizeArgu
   }
   const auto phase = linearize::unwrapped_phase_degrees(r.response);
   for (std::size_t k = 0; k < r.omega.size(); ++k) {
-    j["response"].push_back({{"omega_rad_s", r.omega[k]}, {"gain", number(std::abs(r.response[k]))},
-                             {"phase_deg", phase[k]}, {"real", number(r.response[k].real())},
-                             {"imag", number(r.response[k].imag())}});
+    j["response"].push_back({{"omega_rad_s", r.omega[k]}, {"gain", json_number(std::abs(r.response[k]))},
+                             {"phase_deg", phase[k]}, {"real", json_number(r.response[k].real())},
+                             {"imag", json_number(r.response[k].imag())}});
   }
   return j.dump(1) + "\n";
 }

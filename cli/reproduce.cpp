@@ -27,6 +27,7 @@
 #include "cli/checks.hpp"
 #include "cli/plots_dir.hpp"
 #include "core/files.hpp"
+#include "core/format.hpp"
 #include "cli/commands.hpp"
 #include "study/bode.hpp"
 #include "study/render.hpp"
@@ -161,9 +162,8 @@ void run_reproduce(const ReproduceArguments& args) {
   std::size_t holds = 0;
   for (const auto& c : result.claims) holds += c.holds ? 1 : 0;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "reproduced Tables 1-8 on the simulated lab canal in " << std::fixed;
-  std::cout.precision(1);
-  std::cout << seconds << " s: " << holds << " of " << result.claims.size()
+  std::cout << "reproduced Tables 1-8 on the simulated lab canal in " << format_fixed(seconds, 1) << " s: " << holds
+            << " of " << result.claims.size()
             << " of the paper's conclusions checked hold here\n";
   for (const auto& [file, text] : files) std::cout << "wrote " << file.string() << "\n";
 }

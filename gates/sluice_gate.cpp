@@ -182,54 +182,62 @@ SluiceGate::Partials SluiceGate::free_flow(double y1, double a) const {
   return p;
 }
 
-// Flow from side 1 (the higher one, y1 >= y3) to side 3; partials in (y1, y3, raw opening a).
-SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateRegime& regime,
-                                         Memo* memo) const {
-  Partials out;
-  const double geometric = std::max(a, 0.0) + options_.leakage_opening;
-  const double dgeometric_da = a > 0.0 ? 1.0 : 0.0;
-  regime = GateRegime::closed;
-  if (geometric < smallest_opening || y1 <= 0.0) return out;
-  const bool out_of_water = geometric >= y1;
+// The opening the law sees, with its partials in the raw opening a and in y1: the geometric
+// opening (leakage included), frozen at cap_ratio y1 near and above the surface (header comment).
+struct SluiceGate::SeenOpening {
+  double a = 0.0, d_a = 0.0, d_y1 = 0.0;
+  bool out_of_water = false;  // the geometric opening reaches the upstream surface
+};
 
-  // Opening seen by the law: frozen at cap_ratio y1 near and above the surface (header comment).
+// The border of the flow law: Swamee's y_lc (paper eq. 23), floored at kappa y3. Without the
+// floor a gate opened wider than ~0.75 y3 (where y_lc < y3) would pass free flow right up to
+// zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
+// the discharge falls continuously to zero. The paper's regime classification
+// (classify_regime) keeps the published condition.
+struct SluiceGate::Border {
+  double y_lc = 0.0;
+  bool floored = false;  // at kappa y3, where it does not depend on the opening
+};
+
+SluiceGate::SeenOpening SluiceGate::seen_opening(double y1, double a, double geometric) const {
+  const double dgeometric_da = a > 0.0 ? 1.0 : 0.0;
   const double cap = cap_ratio_ * y1;
   const bool capped = geometric >= cap;
-  const double a_seen = capped ? cap : geometric;
-  const double dseen_da = capped ? 0.0 : dgeometric_da;
-  const double dseen_dy1 = capped ? cap_ratio_ : 0.0;
+  return {capped ? cap : geometric, capped ? 0.0 : dgeometric_da, capped ? cap_ratio_ : 0.0, geometric >= y1};
+}
 
-  // Free discharge Qf(y1, a) and its total partials.
-  double qf = 0.0, dqf_dy1 = 0.0, dqf_da = 0.0;
-  if (out_of_water && !reaches_critical_) {
-    qf = critical_discharge(y1, options_.gravity);  // jump documented in the header
-    dqf_dy1 = 1.5 * qf / y1;
-  } else {
-    Partials f;
-    if (memo && memo->free_y1 == y1 && memo->free_a == a_seen) {
-      f.q = memo->free_q;
-      f.d_y1 = memo->free_d_y1;
-      f.d_a = memo->free_d_a;
-    } else {
-      f = free_flow(y1, a_seen);
-      if (memo) {
-        memo->free_y1 = y1;
-        memo->free_a = a_seen;
-        memo->free_q = f.q;
-        memo->free_d_y1 = f.d_y1;
-        memo->free_d_a = f.d_a;
-      }
-    }
-    qf = f.q;
-    dqf_dy1 = f.d_y1 + f.d_a * dseen_dy1;
-    dqf_da = f.d_a * dseen_da;
+// Free discharge Qf(y1, a) and its total partials (through the seen opening), the free-flow
+// partials memoised on (y1, a_seen).
+SluiceGate::Partials SluiceGate::free_discharge(double y1, const SeenOpening& seen, Memo* memo) const {
+  Partials out;
+  if (seen.out_of_water && !reaches_critical_) {
+    out.q = critical_discharge(y1, options_.gravity);  // jump documented in the header
+    out.d_y1 = 1.5 * out.q / y1;
+    return out;
   }
+  Partials f;
+  if (memo && memo->free_y1 == y1 && memo->free_a == seen.a) {
+    f.q = memo->free_q;
+    f.d_y1 = memo->free_d_y1;
+    f.d_a = memo->free_d_a;
+  } else {
+    f = free_flow(y1, seen.a);
+    if (memo) {
+      memo->free_y1 = y1;
+      memo->free_a = seen.a;
+      memo->free_q = f.q;
+      memo->free_d_y1 = f.d_y1;
+      memo->free_d_a = f.d_a;
+    }
+  }
+  out.q = f.q;
+  out.d_y1 = f.d_y1 + f.d_a * seen.d_y1;
+  out.d_a = f.d_a * seen.d_a;
+  return out;
+}
 
-  // The border of the flow law: Swamee's y_lc (paper eq. 23), floored at kappa y3. Without the
-  // floor a gate opened wider than ~0.75 y3 (where y_lc < y3) would pass free flow right up to
-  // zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
-  // the discharge falls continuously to zero. The paper's regime classification
-  // (classify_regime) keeps the published condition.
+// The border (struct Border), Swamee's y_lc memoised on (y3, a_seen).
+SluiceGate::Border SluiceGate::flow_border(double y3, double a_seen, Memo* memo) const {
   double y_lc_swamee;
   if (memo && memo->border_y3 == y3 && memo->border_a == a_seen) {
     y_lc_swamee = memo->border;
@@ -242,36 +250,37 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
     }
   }
   const bool floored = zero_head_border_ratio * y3 > y_lc_swamee;
-  const double y_lc = floored ? zero_head_border_ratio * y3 : y_lc_swamee;
-  if (y1 > y_lc) {  // condition (8): free flow
-    regime = out_of_water ? GateRegime::out_of_water : GateRegime::free;
-    out.q = qf;
-    out.d_y1 = dqf_dy1;
-    out.d_a = dqf_da;
-    return out;
-  }
-  regime = out_of_water ? GateRegime::out_of_water : GateRegime::submerged;  // condition (10)
+  return {floored ? zero_head_border_ratio * y3 : y_lc_swamee, floored};
+}
+
+// The simple law's submerged discharge, eq. (11), its head's square root regularised near zero
+// head when zero_head > 0.
+SluiceGate::Partials SluiceGate::submerged_simple(double y1, double y3, const SeenOpening& seen) const {
+  Partials out;
   const double head = y1 - y3;
   const double floor = singular_floor * y1;
+  const double coefficient = options_.submerged_multiplier() * options_.simple_discharge_coefficient;
+  const double h0 = options_.zero_head;
+  const HeadPower power = h0 > 0.0 ? regularised_head_power(head, h0, 0.5) : HeadPower{0.0, 0.0};
+  const double root = h0 > 0.0 ? std::sqrt(2.0 * options_.gravity) * power.value
+                               : std::sqrt(2.0 * options_.gravity * head);
+  out.q = coefficient * seen.a * root;
+  const double dq_dhead = h0 > 0.0 ? coefficient * seen.a * std::sqrt(2.0 * options_.gravity) * power.slope
+                                   : coefficient * seen.a * std::sqrt(2.0 * options_.gravity) * 0.5 /
+                                         std::sqrt(std::max(head, floor));
+  out.d_y1 = dq_dhead + coefficient * root * seen.d_y1;
+  out.d_y3 = -dq_dhead;
+  out.d_a = coefficient * root * seen.d_a;
+  return out;
+}
 
-  if (options_.law == GateLaw::simple) {  // eq. (11)
-    const double coefficient = options_.submerged_multiplier() *
-                               options_.simple_discharge_coefficient;
-    const double h0 = options_.zero_head;
-    const HeadPower power = h0 > 0.0 ? regularised_head_power(head, h0, 0.5) : HeadPower{0.0, 0.0};
-    const double root = h0 > 0.0 ? std::sqrt(2.0 * options_.gravity) * power.value
-                                 : std::sqrt(2.0 * options_.gravity * head);
-    out.q = coefficient * a_seen * root;
-    const double dq_dhead = h0 > 0.0 ? coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * power.slope
-                                     : coefficient * a_seen * std::sqrt(2.0 * options_.gravity) * 0.5 /
-                                           std::sqrt(std::max(head, floor));
-    out.d_y1 = dq_dhead + coefficient * root * dseen_dy1;
-    out.d_y3 = -dq_dhead;
-    out.d_a = coefficient * root * dseen_da;
-    return out;
-  }
-
-  // Swamee's submergence factor F = D / (0.32 S + D), D = head^0.7, S = (y_lc - y1)^0.7.
+// Swamee's submerged discharge: the free one times the submergence factor
+// F = D / (0.32 S + D), D = head^0.7, S = (y_lc - y1)^0.7, with the submerged multiplier blended in.
+SluiceGate::Partials SluiceGate::submerged_swamee(double y1, double y3, const SeenOpening& seen, const Partials& free,
+                                                  const Border& border) const {
+  const double head = y1 - y3;
+  const double floor = singular_floor * y1;
+  const double y_lc = border.y_lc;
   const double margin = y_lc - y1;
   const double h0 = options_.zero_head;
   const HeadPower power = h0 > 0.0 ? regularised_head_power(head, h0, submergence_exponent) : HeadPower{0.0, 0.0};
@@ -287,23 +296,44 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
                                          (head > floor ? D / head : floored_power(head, submergence_exponent - 1.0, floor));
   const double dS_dmargin = submergence_exponent *
       (margin > floor ? S / margin : floored_power(margin, submergence_exponent - 1.0, floor));
-  const double dylc_dy3 = floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;
-  const double dylc_dseen = floored ? 0.0 : -border_exponent * y_lc / a_seen;
+  const double dylc_dy3 = border.floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;
+  const double dylc_dseen = border.floored ? 0.0 : -border_exponent * y_lc / seen.a;
 
-  const double dF_dy1 = dF_dD * dD_dhead + dF_dS * dS_dmargin * (dylc_dseen * dseen_dy1 - 1.0);
+  const double dF_dy1 = dF_dD * dD_dhead + dF_dS * dS_dmargin * (dylc_dseen * seen.d_y1 - 1.0);
   const double dF_dy3 = -dF_dD * dD_dhead + dF_dS * dS_dmargin * dylc_dy3;
-  const double dF_da = dF_dS * dS_dmargin * dylc_dseen * dseen_da;
+  const double dF_da = dF_dS * dS_dmargin * dylc_dseen * seen.d_a;
 
   // Submerged multiplier relative to the free one, blended in F (header): q = qf F (rho + (1 - rho) F),
   // dq/dF = qf (rho + 2 (1 - rho) F). rho = 1 leaves Swamee's law exactly as published.
   const double rho = options_.submerged_multiplier() / options_.discharge_coefficient_multiplier;
   const double blend = rho + (1.0 - rho) * F;
   const double dblend = rho + 2.0 * (1.0 - rho) * F;
-  out.q = qf * F * blend;
-  out.d_y1 = dqf_dy1 * F * blend + qf * dF_dy1 * dblend;
-  out.d_y3 = qf * dF_dy3 * dblend;
-  out.d_a = dqf_da * F * blend + qf * dF_da * dblend;
+  Partials out;
+  out.q = free.q * F * blend;
+  out.d_y1 = free.d_y1 * F * blend + free.q * dF_dy1 * dblend;
+  out.d_y3 = free.q * dF_dy3 * dblend;
+  out.d_a = free.d_a * F * blend + free.q * dF_da * dblend;
   return out;
+}
+
+// Flow from side 1 (the higher one, y1 >= y3) to side 3; partials in (y1, y3, raw opening a):
+// the opening the law sees, the free discharge, the border of the flow law, then free flow
+// (condition 8) or the submerged law (condition 10).
+SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateRegime& regime,
+                                         Memo* memo) const {
+  regime = GateRegime::closed;
+  const double geometric = std::max(a, 0.0) + options_.leakage_opening;
+  if (geometric < smallest_opening || y1 <= 0.0) return {};
+  const SeenOpening seen = seen_opening(y1, a, geometric);
+  const Partials free = free_discharge(y1, seen, memo);
+  const Border border = flow_border(y3, seen.a, memo);
+  if (y1 > border.y_lc) {  // condition (8): free flow
+    regime = seen.out_of_water ? GateRegime::out_of_water : GateRegime::free;
+    return free;
+  }
+  regime = seen.out_of_water ? GateRegime::out_of_water : GateRegime::submerged;  // condition (10)
+  if (options_.law == GateLaw::simple) return submerged_simple(y1, y3, seen);
+  return submerged_swamee(y1, y3, seen, free, border);
 }
 
 GateFlow SluiceGate::evaluate(double y1, double y3, double a) const {

@@ -181,8 +181,16 @@ class SluiceGate {
   struct Partials {
     double q = 0.0, d_y1 = 0.0, d_y3 = 0.0, d_a = 0.0;
   };
+  struct SeenOpening;
+  struct Border;
   Partials forward(double y1, double y3, double a, GateRegime& regime, Memo* memo) const;
   Partials free_flow(double y1, double a_seen) const;
+  SeenOpening seen_opening(double y1, double a, double geometric) const;
+  Partials free_discharge(double y1, const SeenOpening& seen, Memo* memo) const;
+  Border flow_border(double y3, double a_seen, Memo* memo) const;
+  Partials submerged_simple(double y1, double y3, const SeenOpening& seen) const;
+  Partials submerged_swamee(double y1, double y3, const SeenOpening& seen, const Partials& free,
+                            const Border& border) const;
 
   SluiceGateOptions options_;
   double cap_ratio_ = 1.0;

@@ -267,6 +267,24 @@ void add_jet(Flux& f, const Section& s, double g, double q, double energy) {
 
 }  // namespace
 
+namespace {
+
+// The depth of a gate's face where its law (the face law, the other side and the opening fixed)
+// passes what the cell's outgoing characteristic allows, warm-started from and then updating
+// `warm_depth`; none when the face is choked. The lambda captures one pointer, so its
+// std::function needs no allocation.
+std::optional<double> gate_face_depth(FaceLaw& face_law, const solver::BoundaryInput& in, End end, double& warm_depth) {
+  auto law = [p = &face_law](double h) {
+    const FaceLaw::Value v = (*p)(h);
+    return coupling::LawValue{v.q, v.dq_dh};
+  };
+  const auto h = coupling::solve_face_depth(in.section, in.gravity, end, in.cell, law, warm_depth);
+  if (h) warm_depth = *h;
+  return h;
+}
+
+}  // namespace
+
 // --- head gate -----------------------------------------------------------------------------------
 
 HeadGateBoundary::HeadGateBoundary(const GateGeometry& geometry, std::shared_ptr<Supply> supply,
@@ -278,16 +296,10 @@ Flux HeadGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double y1 = supply_->level(in.time);
   const double a = operation_->opening(in.time);
   // The supply level and the opening are fixed during the solve (FaceLaw keeps the free
-  // discharge); the lambda captures one pointer, so its std::function needs no allocation.
+  // discharge).
   FaceLaw face_law(law_, width_, false, y1, a);
-  auto law = [p = &face_law](double h) {
-    const FaceLaw::Value v = (*p)(h);
-    return coupling::LawValue{v.q, v.dq_dh};
-  };
-  const auto h = coupling::solve_face_depth(in.section, in.gravity, End::upstream, in.cell, law,
-                                            warm_depth_);
+  const auto h = gate_face_depth(face_law, in, End::upstream, warm_depth_);
   if (!h) return critical_face_flux(in.section, in.gravity, End::upstream, in.cell);
-  warm_depth_ = *h;
   const double q = face_law.discharge_at(*h);
   Flux f = face_flux_with_speed(in.section, in.gravity, *h, q);
   add_jet(f, in.section, in.gravity, q, y1);
@@ -312,14 +324,8 @@ Flux TailGateBoundary::flux(const solver::BoundaryInput& in) const {
   const double a = operation_->opening(in.time);
   // Tail level and opening fixed during the solve (FaceLaw keeps the regime border).
   FaceLaw face_law(law_, width_, true, y3, a);
-  auto law = [p = &face_law](double h) {
-    const FaceLaw::Value v = (*p)(h);
-    return coupling::LawValue{v.q, v.dq_dh};
-  };
-  const auto h = coupling::solve_face_depth(in.section, in.gravity, End::downstream, in.cell, law,
-                                            warm_depth_);
+  const auto h = gate_face_depth(face_law, in, End::downstream, warm_depth_);
   if (!h) return critical_face_flux(in.section, in.gravity, End::downstream, in.cell);
-  warm_depth_ = *h;
   const double q = face_law.discharge_at(*h);
   return face_flux_with_speed(in.section, in.gravity, *h, q);
 }

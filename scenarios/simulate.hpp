@@ -79,7 +79,7 @@ struct SimulateOptions {
   ProgressCallback progress;
   Drive drive;
   // Time marching before t = 0 when the steady-state (Newton) solve is off or fails [s]: at most
-  // this long, stopping once the canal has settled (simulate.cpp, settled) but never before
+  // this long, stopping once the canal has settled (settle.cpp, settled) but never before
   // the experiment's settle_s.
   double settle_time = 600.0;
   bool use_steady_state_solver = true;

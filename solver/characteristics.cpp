@@ -1,5 +1,7 @@
 #include "solver/characteristics.hpp"
 
+#include "solver/illinois.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -49,8 +51,9 @@ FaceState solve_face_state(const Section& section, double gravity, End end,
     max_depth = 4.0 * (cell.depth + head * head / gravity) + 1e-3;
   }
   // Scan down from max_depth on a geometric grid (48 points over six decades, then 0): the first
-  // sign change is the deepest root. Refine it by the Illinois variant of false position, which
-  // converges superlinearly, falling back on bisection steps (at most 100 iterations).
+  // sign change is the deepest root. Refine it by the Illinois variant of false position
+  // (solver/illinois.hpp), which converges superlinearly, with a bisection every eighth trial
+  // (at most 100 trials).
   constexpr int kScan = 48;
   const double ratio = std::pow(1e-6, 1.0 / (kScan - 1));
   FaceState best;
@@ -64,29 +67,12 @@ FaceState solve_face_state(const Section& section, double gravity, End end,
       best.depth = h_hi;
     }
     if ((r_lo <= 0.0 && r_hi >= 0.0) || (r_lo >= 0.0 && r_hi <= 0.0)) {
-      double lo = h_lo, hi = h_hi, flo = r_lo, fhi = r_hi;
-      int side = 0;
-      for (int it = 0; it < 100 && hi - lo > 1e-14 * hi; ++it) {
-        double mid = (flo != fhi) ? (lo * fhi - hi * flo) / (fhi - flo) : 0.5 * (lo + hi);
-        if (!(mid > lo && mid < hi) || it % 8 == 7) mid = 0.5 * (lo + hi);  // keep the bracket shrinking
-        const double fm = residual(mid);
-        if (fm == 0.0) {
-          lo = hi = mid;
-          break;
-        }
-        if ((fm < 0.0) == (flo < 0.0)) {
-          lo = mid;
-          flo = fm;
-          if (side == -1) fhi *= 0.5;  // Illinois: halve the stale end's value
-          side = -1;
-        } else {
-          hi = mid;
-          fhi = fm;
-          if (side == 1) flo *= 0.5;
-          side = 1;
-        }
-      }
-      best.depth = 0.5 * (lo + hi);
+      IllinoisOptions o;
+      o.max_iterations = 100;
+      o.relative_width = 1e-14;
+      o.bisect_every = 8;
+      const IllinoisResult root = illinois(residual, h_lo, h_hi, r_lo, r_hi, o);
+      best.depth = 0.5 * (root.lo + root.hi);
       best.found = true;
       break;
     }

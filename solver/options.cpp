@@ -3,14 +3,13 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/format.hpp"
+
 namespace canalsim::solver {
 namespace {
 
 std::string describe(const std::string& field, double value, const std::string& range) {
-  std::ostringstream text;
-  text.precision(10);
-  text << field << " = " << value << " is outside the allowed range " << range;
-  return text.str();
+  return field + " = " + format_g(value, 10) + " is outside the allowed range " + range;
 }
 
 // Checks an optional per-cell array: empty, or `cells` finite values (non-negative if asked).
@@ -27,7 +26,7 @@ Status check_cell_array(const std::string& field, const std::vector<double>& val
     const double v = values[i];
     if (!std::isfinite(v) || (non_negative && v < 0.0)) {
       std::ostringstream text;
-      text << field << "[" << i << "] = " << v << " is outside the allowed range "
+      text << field << "[" << i << "] = " << format_g(v) << " is outside the allowed range "
            << (non_negative ? "[0, inf) (finite)" : "finite values");
       return Status::error(text.str());
     }

@@ -1,5 +1,6 @@
 #include "solver/steady_state.hpp"
 
+#include "solver/illinois.hpp"
 #include "solver/rates_jacobian.hpp"
 #include "solver/scheme.hpp"
 #include "solver/sundials_handles.hpp"
@@ -60,31 +61,6 @@ int jacobian(N_Vector u, N_Vector f, SUNMatrix J, void* data, N_Vector, N_Vector
 // it, well inside Newton's quadratic basin, where the flat start (Q = 0) took 9–15 iterations.
 // Used only when it lowers the residual; otherwise Newton starts from the canal's state.
 
-// Root of f on [lo, hi] with f(lo), f(hi) of opposite signs (Illinois false position).
-template <class F>
-double illinois(F&& f, double lo, double hi, double flo, double fhi, double rel_tol) {
-  int side = 0;
-  double x = lo;
-  for (int it = 0; it < 60 && hi - lo > rel_tol * std::abs(hi); ++it) {
-    x = flo != fhi ? (lo * fhi - hi * flo) / (fhi - flo) : 0.5 * (lo + hi);
-    if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
-    const double fx = f(x);
-    if (fx == 0.0) return x;
-    if ((fx < 0.0) == (flo < 0.0)) {
-      lo = x;
-      flo = fx;
-      if (side == -1) fhi *= 0.5;
-      side = -1;
-    } else {
-      hi = x;
-      fhi = fx;
-      if (side == 1) flo *= 0.5;
-      side = 1;
-    }
-  }
-  return x;
-}
-
 struct Shooting {
   Canal& canal;
   double time;
@@ -134,7 +110,10 @@ struct Shooting {
       std::swap(lo, hi);
       std::swap(flo, fhi);
     }
-    return illinois(f, lo, hi, flo, fhi, 1e-10);
+    IllinoisOptions o;
+    o.max_iterations = 60;
+    o.relative_width = 1e-10;
+    return illinois(f, lo, hi, flo, fhi, o).last;
   }
 
   // Friction slope n² Q|Q| / (A² R^{4/3}) = n² Q|Q| ρ^{4/3} / A² with ρ = P/A (no pow).

@@ -48,6 +48,10 @@ std::vector<Recording> truth_recordings(int cells = 150, double cfl = 0.5) {
   return recordings_of(truth);
 }
 
+// A calibration takes seconds to minutes on two threads: each argument is timed once, in
+// wall-clock seconds.
+void once_in_seconds(benchmark::internal::Benchmark* b) { b->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime(); }
+
 // The timed loop: calibrate the lab on `recordings` with `options`; the counters every benchmark
 // here reports. Returns the last calibration.
 calibration::Calibration time_calibration(benchmark::State& state, const std::vector<Recording>& recordings,
@@ -89,9 +93,7 @@ BENCHMARK(BM_CalibrateDefaultSetOnFourLabRecordings)
     ->Args({2, 1, 0})
     ->Args({1, 0, 0})
     ->Args({2, 0, 2})
-    ->Iterations(1)
-    ->Unit(benchmark::kSecond)
-    ->UseRealTime();
+    ->Apply(once_in_seconds);
 
 // The grid refinement of `canalsim calibrate` (at most two) on recordings of a truth on 800 cells
 // (minmod, Courant 0.45): the grid check finds the lab's 100 cells limit the fit and the
@@ -110,9 +112,7 @@ BENCHMARK(BM_CalibrateWithGridRefinementOnAFineGridTruth)
     ->Arg(0)
     ->Arg(1)
     ->Arg(2)
-    ->Iterations(1)
-    ->Unit(benchmark::kSecond)
-    ->UseRealTime();
+    ->Apply(once_in_seconds);
 
 // Clean recordings (no noise, no offsets) of an 800-cell truth (minmod, Courant 0.45) whose
 // physics differs where an independent simulator's would: its own regularisation of Swamee's law
@@ -155,9 +155,7 @@ BENCHMARK(BM_CalibrateAsTheCommandLineDoes)
     ->ArgNames({"truth"})
     ->Arg(0)
     ->Arg(1)
-    ->Iterations(1)
-    ->Unit(benchmark::kSecond)
-    ->UseRealTime();
+    ->Apply(once_in_seconds);
 
 }  // namespace
 

@@ -8,13 +8,17 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
-#include "reduced_models/identification.hpp"
 #include "core/recording.hpp"
+#include "reduced_models/identification.hpp"
 #include "testing/paired_timing.hpp"
+#include "testing/recordings.hpp"
 #include "testing/synthetic.hpp"
 
 namespace {
@@ -22,13 +26,26 @@ namespace {
 using namespace canalsim::reduced;
 namespace testing = canalsim::testing;
 
-ExperimentData lfom_data(std::size_t n) {
-  Model truth{ModelKind::lfom, {}, {}};
-  testing::set_parameters(truth, {{"K", 1.1}, {"T", 2.06}, {"lambda", 0.54}, {"L", 4.9}});
+// A model of `kind` with the parameter `values`, at the reference head `head_ref_mm` of the
+// nonlinear models when one is given.
+Model truth_of(ModelKind kind, std::initializer_list<std::pair<const char*, double>> values, double head_ref_mm = 0.0) {
+  Model truth{kind, {}, {}};
+  testing::set_parameters(truth, values);
+  if (head_ref_mm > 0.0) truth.p.head_ref_mm = head_ref_mm;
+  return truth;
+}
+
+// The response of `truth` to n samples of the synthetic PRBS experiment (testing/synthetic.hpp),
+// prepared for the fits.
+ExperimentData synthetic_data(const Model& truth, std::size_t n) {
   testing::SyntheticSpec spec;
   spec.n = n;
   return prepare_data(testing::synthetic_recording(truth, spec));
 }
+
+Model lfom_truth() { return truth_of(ModelKind::lfom, {{"K", 1.1}, {"T", 2.06}, {"lambda", 0.54}, {"L", 4.9}}); }
+
+ExperimentData lfom_data(std::size_t n) { return synthetic_data(lfom_truth(), n); }
 
 // `criterion`: the library's default, the paper's IAE (the study's tables); or least squares, the
 // CLI's default: the IAE search, then the least-squares polish on the whole record, on the
@@ -63,14 +80,11 @@ BENCHMARK(BM_LfomLeastSquaresFit)->Arg(20000)->Unit(benchmark::kMillisecond);
 // of whole-sample delays, then L free) on the same file. CPU seconds of each process, in
 // alternating pairs; the ratio is the figure (target: canalsim ≤ 0.15 s and ≥ 100× faster).
 void BM_FitCommandAgainstScipy(benchmark::State& state) {
-  const auto n = static_cast<std::size_t>(state.range(0));
-  Model truth{ModelKind::lfom, {}, {}};
-  testing::set_parameters(truth, {{"K", 1.1}, {"T", 2.06}, {"lambda", 0.54}, {"L", 4.9}});
   testing::SyntheticSpec spec;
-  spec.n = n;
+  spec.n = static_cast<std::size_t>(state.range(0));
   const std::filesystem::path file =
       std::filesystem::temp_directory_path() / ("canalsim_bench_lfom_" + std::to_string(::getpid()) + ".csv");
-  canalsim::write_recording(file, testing::synthetic_recording(truth, spec));
+  canalsim::write_recording(file, testing::synthetic_recording(lfom_truth(), spec));
   const std::string canalsim_fit = std::string(CANALSIM_PROGRAM) + " fit -m lfom " + file.string() + " > /dev/null 2>&1";
   const std::string scipy_fit = std::string("/usr/bin/python3 ") + CANALSIM_SCIPY_FIT + " " + file.string() + " > /dev/null 2>&1";
   const auto run = [](const std::string& command) {
@@ -91,8 +105,6 @@ ExperimentData slow_pool_step_test(std::size_t n) {
   const double h = 0.125, K = 1.7, T = 3600.0, L = 300.0, every = 4.0 * 3600.0;
   std::mt19937 rng(1);
   std::normal_distribution<double> noise(0.0, 0.03);
-  canalsim::Recording rec;
-  rec.source = "slow_pool.csv";
   std::vector<double> t(n), u(n), y(n);
   for (std::size_t k = 0; k < n; ++k) {
     t[k] = h * static_cast<double>(k);
@@ -105,10 +117,7 @@ ExperimentData slow_pool_step_test(std::size_t n) {
     }
     y[k] = 0.1 * std::round((level + noise(rng)) / 0.1);
   }
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", u);
-  rec.set_column("y_dwe_mm", y);
-  return prepare_data(rec);
+  return prepare_data(testing::command_and_level("slow_pool.csv", std::move(t), std::move(u), std::move(y)));
 }
 
 void BM_LiomFitSlowPoolStepTest(benchmark::State& state) {
@@ -134,12 +143,9 @@ void BM_LiomFitSlowPoolStepTest(benchmark::State& state) {
 BENCHMARK(BM_LiomFitSlowPoolStepTest)->Arg(1000000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_NlfomSFit(benchmark::State& state) {
-  Model truth{ModelKind::nlfom_s, {}, {}};
-  testing::set_parameters(truth, {{"K", 1.56}, {"T", 2.3}, {"lambda", 0.66}, {"gamma", 0.6}, {"L", 4.9}});
-  truth.p.head_ref_mm = 15.0;
-  testing::SyntheticSpec spec;
-  spec.n = static_cast<std::size_t>(state.range(0));
-  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  const Model truth =
+      truth_of(ModelKind::nlfom_s, {{"K", 1.56}, {"T", 2.3}, {"lambda", 0.66}, {"gamma", 0.6}, {"L", 4.9}}, 15.0);
+  const auto data = synthetic_data(truth, static_cast<std::size_t>(state.range(0)));
   FitOptions options;
   options.head_ref_mm = 15.0;
   int evaluations = 0;
@@ -155,11 +161,9 @@ BENCHMARK(BM_NlfomSFit)->Arg(2044)->Unit(benchmark::kMillisecond)->UseRealTime()
 // A γ sweep over the paper's grid 0:10:0.05 (201 fits) of NLFOM-F on one PRBS period, on two
 // threads (the CLI's `--gamma 0:10:0.05`).
 void BM_GammaSweepNlfomF(benchmark::State& state) {
-  Model truth{ModelKind::nlfom_f, {}, {}};
-  testing::set_parameters(truth, {{"K", 0.78}, {"T", 0.77}, {"lambda", 0.57}, {"gamma", 3.25}, {"L", 4.9}});
-  truth.p.head_ref_mm = 60.0;
-  const std::vector<ExperimentData> data{
-      prepare_data(testing::synthetic_recording(truth, testing::SyntheticSpec{}))};
+  const Model truth =
+      truth_of(ModelKind::nlfom_f, {{"K", 0.78}, {"T", 0.77}, {"lambda", 0.57}, {"gamma", 3.25}, {"L", 4.9}}, 60.0);
+  const std::vector<ExperimentData> data{synthetic_data(truth, testing::SyntheticSpec{}.n)};
   FitOptions options;
   options.head_ref_mm = 60.0;
   options.threads = 2;

@@ -70,30 +70,50 @@ bool march_until_within(canalsim::solver::Canal& canal, const std::vector<double
   }
 }
 
-void BM_SteadyStateNewton(benchmark::State& state) {
+// The canal a builder returns: a scenario's BuiltCanal holds its solver canal.
+canalsim::solver::Canal& canal_of(canalsim::scenarios::BuiltCanal& built) { return built.canal; }
+canalsim::solver::Canal& canal_of(canalsim::solver::Canal& canal) { return canal; }
+
+// `timed` on a fresh canal from `make` at every iteration; building it is not timed.
+template <class Make, class Timed>
+void time_on_fresh_canals(benchmark::State& state, Make make, Timed timed) {
   for (auto _ : state) {
     state.PauseTiming();
-    auto built = lab_op2_canal();
+    auto built = make();
     state.ResumeTiming();
-    const auto summary = canalsim::solver::solve_steady_state(built.canal);
+    timed(canal_of(built));
+  }
+}
+
+// Newton's steady state, with its iterations and residual evaluations.
+template <class Make>
+void time_newton(benchmark::State& state, Make make) {
+  time_on_fresh_canals(state, make, [&state](canalsim::solver::Canal& canal) {
+    const auto summary = canalsim::solver::solve_steady_state(canal);
     if (!summary.status) state.SkipWithError(summary.status.message().c_str());
     state.counters["newton_iterations"] = summary.iterations;
     state.counters["residual_evaluations"] = summary.residual_evaluations;
-  }
+  });
 }
+
+// Time marching until every depth is within 1e-8 m of Newton's steady state (at most t_max s),
+// with the simulated time it took in `unit_s` (`counter`).
+template <class Make>
+void time_marching(benchmark::State& state, Make make, double t_max, const char* counter, double unit_s) {
+  auto reference = make();
+  (void)canalsim::solver::solve_steady_state(canal_of(reference));
+  const std::vector<double> target = depths(canal_of(reference));
+  time_on_fresh_canals(state, make, [&](canalsim::solver::Canal& canal) {
+    if (!march_until_within(canal, target, 1e-8, t_max)) state.SkipWithError("marching failed");
+    state.counters[counter] = canal.time() / unit_s;
+  });
+}
+
+void BM_SteadyStateNewton(benchmark::State& state) { time_newton(state, lab_op2_canal); }
 BENCHMARK(BM_SteadyStateNewton)->Unit(benchmark::kMicrosecond);
 
 void BM_SteadyStateTimeMarchingTo1e8(benchmark::State& state) {
-  auto reference = lab_op2_canal();
-  (void)canalsim::solver::solve_steady_state(reference.canal);
-  const std::vector<double> target = depths(reference.canal);
-  for (auto _ : state) {
-    state.PauseTiming();
-    auto built = lab_op2_canal();
-    state.ResumeTiming();
-    if (!march_until_within(built.canal, target, 1e-8, 1000.0)) state.SkipWithError("marching failed");
-    state.counters["simulated_s"] = built.canal.time();
-  }
+  time_marching(state, lab_op2_canal, 1000.0, "simulated_s", 1.0);
 }
 BENCHMARK(BM_SteadyStateTimeMarchingTo1e8)->Unit(benchmark::kMillisecond);
 
@@ -118,29 +138,11 @@ canalsim::solver::Canal bump_canal() {
   return canal;
 }
 
-void BM_BumpSteadyStateNewton(benchmark::State& state) {
-  for (auto _ : state) {
-    state.PauseTiming();
-    auto canal = bump_canal();
-    state.ResumeTiming();
-    const auto summary = canalsim::solver::solve_steady_state(canal);
-    if (!summary.status) state.SkipWithError("Newton failed");
-    state.counters["newton_iterations"] = summary.iterations;
-  }
-}
+void BM_BumpSteadyStateNewton(benchmark::State& state) { time_newton(state, bump_canal); }
 BENCHMARK(BM_BumpSteadyStateNewton)->Unit(benchmark::kMicrosecond);
 
 void BM_BumpSteadyStateTimeMarchingTo1e8(benchmark::State& state) {
-  auto reference = bump_canal();
-  (void)canalsim::solver::solve_steady_state(reference);
-  const std::vector<double> target = depths(reference);
-  for (auto _ : state) {
-    state.PauseTiming();
-    auto canal = bump_canal();
-    state.ResumeTiming();
-    if (!march_until_within(canal, target, 1e-8, 5000.0)) state.SkipWithError("marching failed");
-    state.counters["simulated_s"] = canal.time();
-  }
+  time_marching(state, bump_canal, 5000.0, "simulated_s", 1.0);
 }
 BENCHMARK(BM_BumpSteadyStateTimeMarchingTo1e8)->Unit(benchmark::kMillisecond);
 
@@ -153,29 +155,11 @@ canalsim::scenarios::BuiltCanal asce2_canal() {
   return canalsim::scenarios::build_canal(asce2, *asce2.find_experiment("steady"));
 }
 
-void BM_Asce2SteadyStateNewton(benchmark::State& state) {
-  for (auto _ : state) {
-    state.PauseTiming();
-    auto built = asce2_canal();
-    state.ResumeTiming();
-    const auto summary = canalsim::solver::solve_steady_state(built.canal);
-    if (!summary.status) state.SkipWithError(summary.status.message().c_str());
-    state.counters["newton_iterations"] = summary.iterations;
-  }
-}
+void BM_Asce2SteadyStateNewton(benchmark::State& state) { time_newton(state, asce2_canal); }
 BENCHMARK(BM_Asce2SteadyStateNewton)->Unit(benchmark::kMillisecond);
 
 void BM_Asce2SteadyStateTimeMarchingTo1e8(benchmark::State& state) {
-  auto reference = asce2_canal();
-  (void)canalsim::solver::solve_steady_state(reference.canal);
-  const std::vector<double> target = depths(reference.canal);
-  for (auto _ : state) {
-    state.PauseTiming();
-    auto built = asce2_canal();
-    state.ResumeTiming();
-    if (!march_until_within(built.canal, target, 1e-8, 60.0 * 86400.0)) state.SkipWithError("marching failed");
-    state.counters["simulated_h"] = built.canal.time() / 3600.0;
-  }
+  time_marching(state, asce2_canal, 60.0 * 86400.0, "simulated_h", 3600.0);
 }
 BENCHMARK(BM_Asce2SteadyStateTimeMarchingTo1e8)->Unit(benchmark::kMillisecond)->Iterations(1);
 

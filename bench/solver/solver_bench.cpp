@@ -45,27 +45,28 @@ void run_steps(benchmark::State& state, Canal& canal, int cells) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * cells);
 }
 
+// Steps of a 1000 m reach, 1 m deep, of the benchmark's argument in cells.
+void run_steps_of_a_km(benchmark::State& state, Section section, double manning, SpatialOrder order) {
+  const int cells = static_cast<int>(state.range(0));
+  auto canal = make_canal(cells, 1000.0, section, 1.0, manning, order);
+  run_steps(state, *canal, cells);
+}
+
 // Full second-order step, rectangular 1 m wide channel, 1 m deep, frictionless.
 void BM_SecondOrderStep(benchmark::State& state) {
-  const int cells = static_cast<int>(state.range(0));
-  auto canal = make_canal(cells, 1000.0, {1.0, 0.0}, 1.0, 0.0, SpatialOrder::second);
-  run_steps(state, *canal, cells);
+  run_steps_of_a_km(state, {1.0, 0.0}, 0.0, SpatialOrder::second);
 }
 BENCHMARK(BM_SecondOrderStep)->RangeMultiplier(10)->Range(100, 100000);
 
 // Same with Manning friction (n = 0.015).
 void BM_SecondOrderStepFriction(benchmark::State& state) {
-  const int cells = static_cast<int>(state.range(0));
-  auto canal = make_canal(cells, 1000.0, {1.0, 0.0}, 1.0, 0.015, SpatialOrder::second);
-  run_steps(state, *canal, cells);
+  run_steps_of_a_km(state, {1.0, 0.0}, 0.015, SpatialOrder::second);
 }
 BENCHMARK(BM_SecondOrderStepFriction)->RangeMultiplier(10)->Range(100, 100000);
 
 // General trapezoidal path (b = 2 m, m = 1.5), friction.
 void BM_SecondOrderStepTrapezoidal(benchmark::State& state) {
-  const int cells = static_cast<int>(state.range(0));
-  auto canal = make_canal(cells, 1000.0, {2.0, 1.5}, 1.0, 0.015, SpatialOrder::second);
-  run_steps(state, *canal, cells);
+  run_steps_of_a_km(state, {2.0, 1.5}, 0.015, SpatialOrder::second);
 }
 BENCHMARK(BM_SecondOrderStepTrapezoidal)->RangeMultiplier(10)->Range(100, 100000);
 
@@ -78,9 +79,7 @@ BENCHMARK(BM_LabCanalSecondOrderStep);
 
 // First-order HLL (piecewise constant, forward Euler) for comparison.
 void BM_FirstOrderStep(benchmark::State& state) {
-  const int cells = static_cast<int>(state.range(0));
-  auto canal = make_canal(cells, 1000.0, {1.0, 0.0}, 1.0, 0.0, SpatialOrder::first);
-  run_steps(state, *canal, cells);
+  run_steps_of_a_km(state, {1.0, 0.0}, 0.0, SpatialOrder::first);
 }
 BENCHMARK(BM_FirstOrderStep)->RangeMultiplier(10)->Range(100, 100000);
 

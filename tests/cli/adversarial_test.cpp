@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 
 #include "testing/cli_run.hpp"
+#include "tests/cli/expect_error.hpp"
 
 namespace {
 
@@ -89,8 +90,7 @@ TEST(Adversarial, MetadataThatIsNotWhatItsKeySaysIsOneErrorNamingFileAndKey) {
     for (const std::string command : {"fit -m nlfom-s bad.csv", "fit -m hybrid bad.csv", "diagnose --model lfom bad.csv",
                                       "diagnose --scenario lab bad.csv", "calibrate --scenario lab bad.csv -o c.toml"}) {
       const RunResult r = run_canalsim(command, scratch);
-      EXPECT_TRUE(is_one_error_line(r)) << c.line << " | " << command << " -> " << r.code << ": " << r.err;
-      EXPECT_NE(r.err.find("bad.csv:"), std::string::npos) << c.line << " | " << command << ": " << r.err;
+      EXPECT_TRUE(fails_naming(r, "bad.csv:"));
       EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.line << " | " << command << ": " << r.err;
     }
   }
@@ -122,8 +122,7 @@ TEST(Adversarial, OutputsThatWouldCollideOrOverwriteAnInputAreRefusedBeforeAnyWo
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_canalsim(c.command, scratch);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
+    EXPECT_TRUE(fails_naming(r, c.expected)) << c.command;
     EXPECT_LT(seconds, 30.0) << c.command << ": refused after the work, not before";
   }
   EXPECT_EQ(read_text(scratch / "op1.csv"), op1_text());
@@ -220,8 +219,7 @@ TEST(Adversarial, DegenerateInputsAndDivergedModelsAreErrorsNotFigures) {
   };
   for (const auto& c : cases) {
     const RunResult r = run_canalsim(c.command, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err << r.out;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
+    EXPECT_TRUE(fails_naming(r, c.expected)) << c.command;
     EXPECT_FALSE(prints_non_finite(r.out)) << c.command << ": " << r.out;
   }
   fs::remove_all(scratch);
@@ -241,9 +239,7 @@ TEST(Adversarial, FlagsThatDoNotApplyAreRefused) {
                                                 }
                                                 return rows;
                                               }();
-  const struct {
-    std::string command, expected;
-  } cases[] = {
+  const std::vector<ErrorCase> cases = {
       {"diagnose --model lfom op1.csv --recorded-upstream", "diagnose --recorded-upstream: applies to --scenario"},
       {"diagnose --scenario lab op1.csv --quantum 0.05", "diagnose --quantum: applies to --model"},
       {"diagnose --scenario lab no_up.csv --recorded-upstream", "no_up.csv: missing column y_up_mm: --recorded-upstream"},
@@ -252,11 +248,7 @@ TEST(Adversarial, FlagsThatDoNotApplyAreRefused) {
       {"fit -m lfom --upstream-level 60 op1.csv", "fit --upstream-level: model lfom does not use the upstream level"},
       {"blindtest --quantum 0.1 --trials 1", "blindtest --quantum: applies to --model"},
   };
-  for (const auto& c : cases) {
-    const RunResult r = run_canalsim(c.command, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
-  }
+  expect_errors(cases, scratch);
   fs::remove_all(scratch);
 }
 
@@ -281,9 +273,7 @@ TEST(Adversarial, EmptyValuesFifosAndUnconvertibleNumbersAreOneLineBeforeAnyWork
   const fs::path scratch = scratch_dir("adv_values");
   std::ofstream(scratch / "op1.csv") << op1_text();
   ASSERT_EQ(::mkfifo((scratch / "fifo.csv").c_str(), 0600), 0);
-  const struct {
-    std::string command, expected;
-  } cases[] = {
+  const std::vector<ErrorCase> cases = {
       {"fit -m liom op1.csv --json ''", "--json: expected a value, got an empty string"},
       {"resample op1.csv -o '' --period 0.26", "expected a value, got an empty string"},
       {"simulate lab -e op1 --out-dir ''", "--out-dir: expected a value, got an empty string"},
@@ -298,11 +288,7 @@ TEST(Adversarial, EmptyValuesFifosAndUnconvertibleNumbersAreOneLineBeforeAnyWork
       {"blindtest --seed -1 --trials 1", "--seed: expected a seed from 0 to 9007199254740992, got -1"},
       {"reproduce -o /dev", "--out /dev: /dev/tables.json is in /dev"},
   };
-  for (const auto& c : cases) {
-    const RunResult r = run_canalsim(c.command, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
-  }
+  expect_errors(cases, scratch);
   EXPECT_EQ(entry_count(scratch), 2u);  // op1.csv and the FIFO: nothing written
   fs::remove_all(scratch);
 }
@@ -317,9 +303,7 @@ TEST(Adversarial, IgnoredFlagsContradictoryUnitsAndUnexcitedRecordingsAreRefused
   std::string late = "t_s,u_mm,y_up_mm,y_dwe_mm\n";
   for (int k = 0; k < 400; ++k) late += std::to_string(0.13 * k) + "," + (k < 399 ? "15" : "20") + ",60," + std::to_string(44 + 0.01 * k) + "\n";
   std::ofstream(scratch / "late.csv") << late;
-  const struct {
-    std::string command, expected;
-  } cases[] = {
+  const std::vector<ErrorCase> cases = {
       {"fit -m nliom-f op1.csv --upstream-level 30", "fit --upstream-level 30: every recording has a y_up_mm column"},
       {"diagnose --model liom op1.csv --upstream-level 60", "diagnose --upstream-level 60: model liom does not use"},
       {"fit -m liom op1.csv --memory full", "fit --memory: model liom has no fractional order"},
@@ -327,11 +311,7 @@ TEST(Adversarial, IgnoredFlagsContradictoryUnitsAndUnexcitedRecordingsAreRefused
       {"fit -m liom hex.csv", "metadata operating_opening_mm: '0x10': expected a number of mm"},
       {"fit -m liom late.csv", "late.csv: the command first leaves its operating point 15 mm at t = 51.87 s, 1 samples"},
   };
-  for (const auto& c : cases) {
-    const RunResult r = run_canalsim(c.command, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << c.command << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.command << ": " << r.err;
-  }
+  expect_errors(cases, scratch);
   const RunResult bound = run_canalsim("fit -m liom op1.csv --bounds K=0.001:0.01", scratch);
   EXPECT_EQ(bound.code, 0) << bound.err;
   EXPECT_NE(bound.err.find("canalsim: warning: fit of liom to op1.csv: K = 0.01 is at its upper bound"), std::string::npos)
@@ -440,8 +420,7 @@ TEST(Adversarial, ARecordedUpstreamIsDrivenByTheInputFilesLevels) {
   std::ofstream(scratch / "command_only.csv") << "t_s,u_mm\n0,20\n10,10\n20,20\n30,10\n";
   write_file_driven_canal(scratch / "missing.toml", "kind = \"recorded\"", "command_only.csv");
   const RunResult missing = run_canalsim("simulate missing.toml -o m.csv", scratch);
-  EXPECT_TRUE(is_one_error_line(missing)) << missing.err;
-  EXPECT_NE(missing.err.find("command_only.csv: missing column y_up_mm"), std::string::npos) << missing.err;
+  EXPECT_TRUE(fails_naming(missing, "command_only.csv: missing column y_up_mm"));
   // A level that cannot feed a gate is refused where it is read, naming the row.
   std::string negative = input;
   negative.replace(negative.find(",60.000000\n"), 11, ",-50\n");
@@ -482,18 +461,14 @@ TEST(Adversarial, ScenarioInputsThatCannotApplyAreRefusedBeforeTheRun) {
       std::ofstream(scratch / (c.name + ".toml")) << text;
     }
     const RunResult r = run_canalsim("simulate " + c.name + ".toml -o out.csv", scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << c.name << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_TRUE(fails_naming(r, c.expected)) << c.name;
   }
   write_file_driven_canal(scratch / "nul.toml", level, "u.csv");
   std::string text = read_text(scratch / "nul.toml");
   text.replace(text.find("name = \"rec\""), 12, "name = \"e\\u0000x\"");
   std::ofstream(scratch / "nul.toml") << text;
-  const RunResult nul = run_canalsim("simulate nul.toml --out-dir od", scratch);
-  EXPECT_TRUE(is_one_error_line(nul)) << nul.err;
-  EXPECT_NE(nul.err.find("experiments[0].name contains the control character 0"), std::string::npos) << nul.err;
-  EXPECT_FALSE(fs::exists(scratch / "out.csv"));
-  EXPECT_FALSE(fs::exists(scratch / "od"));
+  expect_refused_writing_nothing(scratch, "simulate nul.toml --out-dir od",
+                                 "experiments[0].name contains the control character 0", {"out.csv", "od"});
   fs::remove_all(scratch);
 }
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "testing/cli_run.hpp"
+#include "tests/cli/expect_error.hpp"
 
 namespace {
 
@@ -19,10 +20,8 @@ namespace fs = std::filesystem;
 TEST(Fit, JsonInAMissingDirectoryIsRefusedBeforeTheRecordingsAreRead) {
   const fs::path scratch = scratch_dir("fit_json");
   // missing.csv would be the error if the recordings were read first.
-  const RunResult r = run_canalsim("fit --model liom missing.csv --json nodir/fit.json", scratch);
-  EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-  EXPECT_NE(r.err.find("--json nodir/fit.json: directory nodir does not exist"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(scratch / "nodir"));
+  expect_refused_writing_nothing(scratch, "fit --model liom missing.csv --json nodir/fit.json",
+                                 "--json nodir/fit.json: directory nodir does not exist", {"nodir"});
   fs::remove_all(scratch);
 }
 
@@ -95,8 +94,7 @@ TEST(Fit, BoundsAndStartNameTheModelsParametersAndBadOnesAreOneLineErrors) {
       {"--bounds T=1:10 --start T=50", "bounds.T: initial value 50 lies outside [1, 10]"}};
   for (const auto& [flags, message] : bad) {
     const RunResult r = run_canalsim("fit --model liom step.csv " + flags, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << flags << ": " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(message), std::string::npos) << flags << ": " << r.err;
+    EXPECT_TRUE(fails_naming(r, message));
   }
   fs::remove_all(scratch);
 }
@@ -197,8 +195,7 @@ TEST(Fit, JitteredTimeStampsSuggestResampleWhichMakesThemFittable) {
     }
   }
   const RunResult refused = run_canalsim("fit --model liom jitter.csv", scratch);
-  EXPECT_TRUE(is_one_error_line(refused)) << refused.err;
-  EXPECT_NE(refused.err.find("not uniformly sampled"), std::string::npos) << refused.err;
+  EXPECT_TRUE(fails_naming(refused, "not uniformly sampled"));
   EXPECT_NE(refused.err.find("canalsim resample jitter.csv -o uniform.csv --period 0.01"), std::string::npos) << refused.err;
   const RunResult resampled = run_canalsim("resample jitter.csv -o uniform.csv --period 0.05", scratch);
   EXPECT_EQ(resampled.code, 0) << resampled.err;

@@ -3,10 +3,10 @@
 // naming the subcommand or flag and what is expected, exit status 1. Help still exits 0.
 #include <gtest/gtest.h>
 
-#include <utility>
 #include <vector>
 
 #include "testing/cli_run.hpp"
+#include "tests/cli/expect_error.hpp"
 
 namespace {
 
@@ -16,8 +16,7 @@ namespace fs = std::filesystem;
 TEST(Main, AnUnknownSubcommandIsNamedAndTheSubcommandsAreListed) {
   const fs::path scratch = scratch_dir("main_unknown");
   const RunResult r = run_canalsim("foo", scratch);
-  EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-  EXPECT_NE(r.err.find("unknown subcommand 'foo'"), std::string::npos) << r.err;
+  EXPECT_TRUE(fails_naming(r, "unknown subcommand 'foo'"));
   EXPECT_NE(r.err.find("simulate"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("scenarios"), std::string::npos) << r.err;
   fs::remove_all(scratch);
@@ -25,7 +24,7 @@ TEST(Main, AnUnknownSubcommandIsNamedAndTheSubcommandsAreListed) {
 
 TEST(Main, ParseErrorsAreOneLineNamingTheArgumentWithExitStatusOne) {
   const fs::path scratch = scratch_dir("main_parse");
-  const std::vector<std::pair<std::string, std::string>> cases = {
+  const std::vector<ErrorCase> cases = {
       {"", "no subcommand given"},
       {"--bogus", "unknown option '--bogus'"},
       {"fit --model liom x.csv --bogus", "--bogus"},
@@ -37,12 +36,7 @@ TEST(Main, ParseErrorsAreOneLineNamingTheArgumentWithExitStatusOne) {
       {"reproduce --gamma-step 0", "--gamma-step: expected a step in [0.001, 10], got 0"},
       {"simulate", "scenario is required"},
   };
-  for (const auto& [args, expected] : cases) {
-    const RunResult r = run_canalsim(args, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << args << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << " -> " << r.err;
-    EXPECT_EQ(r.err.find("Run with --help"), std::string::npos) << r.err;
-  }
+  expect_errors(cases, scratch, {"Run with --help"});
   fs::remove_all(scratch);
 }
 
@@ -50,20 +44,14 @@ TEST(Main, ParseErrorsAreOneLineNamingTheArgumentWithExitStatusOne) {
 // name the flag the user typed instead.
 TEST(Main, BadFlagValuesNameTheFlagNotTheLibraryField) {
   const fs::path scratch = scratch_dir("main_flags");
-  const std::vector<std::pair<std::string, std::string>> cases = {
+  const std::vector<ErrorCase> cases = {
       {"fit --model nlfom-s --upstream-level -5 x.csv", "--upstream-level: expected a level in mm > 0, got -5"},
       {"fit --model liom --gate-speed -3 x.csv", "--gate-speed: expected a speed in mm/s in [0, 1e+06], got -3"},
       {"fit --model liom --quantum -1 x.csv", "--quantum: expected a resolution in mm in [0, 100], got -1"},
       {"fit --model lfom --memory-terms 0 x.csv", "--memory-terms: expected a number of terms"},
       {"diagnose --model nlfom-s --upstream-level 0 x.csv", "--upstream-level: expected a level in mm > 0, got 0"},
   };
-  for (const auto& [args, expected] : cases) {
-    const RunResult r = run_canalsim(args, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << args << " -> " << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << " -> " << r.err;
-    EXPECT_EQ(r.err.find("Options."), std::string::npos) << r.err;
-    EXPECT_EQ(r.err.find("Actuation."), std::string::npos) << r.err;
-  }
+  expect_errors(cases, scratch, {"Options.", "Actuation."});
   fs::remove_all(scratch);
 }
 
@@ -72,9 +60,7 @@ TEST(Main, EverySubcommandTakesBetweenOneAndSixtyFourThreads) {
   for (const std::string sub : {"fit --model liom x.csv", "diagnose --scenario lab x.csv", "blindtest", "reproduce"}) {
     for (const std::string n : {"0", "65"}) {
       const RunResult r = run_canalsim(sub + " --threads " + n, scratch);
-      EXPECT_TRUE(is_one_error_line(r)) << sub << " " << n << " -> " << r.code << ": " << r.err;
-      EXPECT_NE(r.err.find("--threads: expected a number of threads from 1 to 64, got " + n), std::string::npos)
-          << sub << " -> " << r.err;
+      EXPECT_TRUE(fails_naming(r, "--threads: expected a number of threads from 1 to 64, got " + n));
     }
   }
   fs::remove_all(scratch);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "testing/cli_run.hpp"
+#include "tests/cli/expect_error.hpp"
 
 namespace {
 
@@ -58,8 +59,7 @@ TEST(Simulate, AnOutDirThatIsAFileIsOneErrorLineAndTheFileIsKept) {
   for (const std::string dir : {"taken", "taken/sub"}) {
     const std::size_t before = entry_count(scratch);
     const RunResult r = run_canalsim("simulate short.toml -e b --out-dir " + dir, scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-    EXPECT_NE(r.err.find("--out-dir " + dir + ": taken exists and is not a directory"), std::string::npos) << r.err;
+    EXPECT_TRUE(fails_naming(r, "--out-dir " + dir + ": taken exists and is not a directory"));
     EXPECT_EQ(entry_count(scratch), before);
   }
   EXPECT_EQ(read_text(scratch / "taken"), "keep me\n");
@@ -69,11 +69,8 @@ TEST(Simulate, AnOutDirThatIsAFileIsOneErrorLineAndTheFileIsKept) {
 TEST(Simulate, OutputFileAndOutDirTogetherAreRefused) {
   const fs::path scratch = scratch_dir("simulate_both");
   write_short_lab(scratch);
-  const RunResult r = run_canalsim("simulate short.toml -e b -o b.csv --out-dir recs", scratch);
-  EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-  EXPECT_NE(r.err.find("-o b.csv and --out-dir recs"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(scratch / "b.csv"));
-  EXPECT_FALSE(fs::exists(scratch / "recs"));
+  expect_refused_writing_nothing(scratch, "simulate short.toml -e b -o b.csv --out-dir recs",
+                                 "-o b.csv and --out-dir recs", {"b.csv", "recs"});
   fs::remove_all(scratch);
 }
 
@@ -81,8 +78,7 @@ TEST(Simulate, ExperimentsWithTheSameFileNameAreRefusedBeforeAnyIsSimulated) {
   const fs::path scratch = scratch_dir("simulate_collide");
   write_short_lab(scratch);
   const RunResult r = run_canalsim("simulate short.toml --out-dir recs", scratch);
-  EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-  EXPECT_NE(r.err.find("'a*' and 'as'"), std::string::npos) << r.err;
+  EXPECT_TRUE(fails_naming(r, "'a*' and 'as'"));
   EXPECT_NE(r.err.find("recs/as.csv"), std::string::npos) << r.err;
   EXPECT_EQ(r.out, "");  // no "wrote ..." line
   EXPECT_FALSE(fs::exists(scratch / "recs"));
@@ -92,10 +88,8 @@ TEST(Simulate, ExperimentsWithTheSameFileNameAreRefusedBeforeAnyIsSimulated) {
 TEST(Simulate, AnOutputFileInAMissingDirectoryIsRefused) {
   const fs::path scratch = scratch_dir("simulate_missing");
   write_short_lab(scratch);
-  const RunResult r = run_canalsim("simulate short.toml -e b -o nodir/b.csv", scratch);
-  EXPECT_TRUE(is_one_error_line(r)) << r.code << ": " << r.err;
-  EXPECT_NE(r.err.find("-o nodir/b.csv: directory nodir does not exist"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(scratch / "nodir"));
+  expect_refused_writing_nothing(scratch, "simulate short.toml -e b -o nodir/b.csv",
+                                 "-o nodir/b.csv: directory nodir does not exist", {"nodir"});
   fs::remove_all(scratch);
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "testing/cli_run.hpp"
+#include "tests/cli/expect_error.hpp"
 
 namespace {
 
@@ -23,8 +24,7 @@ TEST(Sweep, AMalformedFileIsOneErrorLineNamingItsLineAndNothingIsWritten) {
     std::ofstream(scratch / "bad.toml") << text;
     const std::size_t before = entry_count(scratch);
     const RunResult r = run_canalsim("sweep bad.toml --out out", scratch);
-    EXPECT_TRUE(is_one_error_line(r)) << r.err;
-    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_TRUE(fails_naming(r, message));
     EXPECT_EQ(entry_count(scratch), before) << "nothing written for " << text;
     EXPECT_FALSE(fs::exists(scratch / "out"));
   }
@@ -40,11 +40,9 @@ TEST(Sweep, AnUnfinishedSweepsJournalIsNeitherOverwrittenNorResumedByAnotherFile
   fs::create_directories(scratch / "out");
   std::ofstream(scratch / "out" / "table.partial.csv") << "# canalsim sweep journal of a.toml, fingerprint 0\n";
   const RunResult fresh = run_canalsim("sweep a.toml --out out", scratch);
-  EXPECT_TRUE(is_one_error_line(fresh)) << fresh.err;
-  EXPECT_NE(fresh.err.find("expected --resume"), std::string::npos) << fresh.err;
+  EXPECT_TRUE(fails_naming(fresh, "expected --resume"));
   const RunResult other = run_canalsim("sweep b.toml --out out --resume", scratch);
-  EXPECT_TRUE(is_one_error_line(other)) << other.err;
-  EXPECT_NE(other.err.find("the journal of another sweep file"), std::string::npos) << other.err;
+  EXPECT_TRUE(fails_naming(other, "the journal of another sweep file"));
   EXPECT_EQ(read_text(scratch / "out" / "table.partial.csv"), "# canalsim sweep journal of a.toml, fingerprint 0\n");
   EXPECT_FALSE(fs::exists(scratch / "out" / "table.csv"));
   fs::remove_all(scratch);

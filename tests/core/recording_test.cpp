@@ -7,16 +7,13 @@
 #include <gtest/gtest.h>
 #include <sstream>
 
+#include "testing/refusals.hpp"
+
 namespace canalsim {
 namespace {
 
 std::string message_of(const std::string& text) {
-  try {
-    parse_recording(text, "rec.csv");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::input_error_of([&] { (void)parse_recording(text, "rec.csv"); });
 }
 
 TEST(Recording, ParsesMetadataHeaderAndRowsInPaperUnits) {

@@ -9,6 +9,9 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <utility>
+
+#include "testing/recordings.hpp"
 
 namespace canalsim {
 namespace {
@@ -26,12 +29,7 @@ Recording jittered_recording() {
     u.push_back(time >= 10.4 ? 25.0 : 20.0);
     y.push_back(60.0 + 2.0 * std::sin(2.0 * kPi * 0.2 * time) + 0.5 * std::sin(2.0 * kPi * 7.3 * time));
   }
-  Recording rec;
-  rec.source = "logger.csv";
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", u);
-  rec.set_column("y_dwe_mm", y);
-  return rec;
+  return testing::command_and_level("logger.csv", std::move(t), std::move(u), std::move(y));
 }
 
 TEST(Resample, KeepsThePassbandRemovesWhatWouldAliasAndHoldsTheCommand) {

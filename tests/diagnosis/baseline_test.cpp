@@ -19,11 +19,10 @@
 #include "scenarios/scenario_toml.hpp"
 #include "scenarios/simulate.hpp"
 #include "testing/realistic.hpp"
+#include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
-
-constexpr double kSettle = 150.0;
 
 // The laboratory as it "really" is: another discretisation, and parameters off the scenario's.
 scenarios::Scenario perturbed_truth() {
@@ -41,17 +40,8 @@ std::vector<Recording> record(const std::vector<std::string>& experiments, const
   std::vector<Recording> out;
   for (const auto& name : experiments) {
     scenarios::Scenario s = truth;
-    scenarios::ExperimentSpec e = *s.find_experiment(name);
-    e.duration_s = 120.0;
-    scenarios::SensorSpec sensors = s.sensors;
-    sensors.noise_std_mm = 0.05;
-    sensors.seed = seed++;
-    e.sensors = sensors;
-
-    scenarios::SimulateOptions so;
-    so.settle_time = kSettle;
-    so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
-    Recording r = simulate_concealed(s, e, effects, 0.0, so);
+    const scenarios::ExperimentSpec e = short_experiment(s, name, 120.0, s.sensors, 0.05, seed++);
+    Recording r = simulate_concealed(s, e, effects, 0.0, settled_run(/*quiet=*/true));
     r.source = prefix + name + ".csv";
     out.push_back(std::move(r));
   }

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "scenarios/builtin.hpp"
+#include "testing/refusals.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
@@ -159,19 +160,22 @@ TEST(Blindtest, RealisticTrialsCalibrateOnABaselineOfAnotherTruthAndNameTheEffec
 }
 
 TEST(Blindtest, InvalidOptionsNameTheField) {
-  BlindtestOptions o;
-  o.trials = 0;
-  EXPECT_NE(o.validate().message().find("trials"), std::string::npos);
-  o = {};
-  o.effects = {"gremlins"};
-  EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
-  o = {};
-  o.realistic = RealisticTruth{};
-  o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
-  EXPECT_NE(o.validate().message().find("realistic.noise_low_mm"), std::string::npos) << o.validate().message();
-  o.realistic->noise_low_mm = 0.03;
-  o.model = ModelDiagnoseOptions{};
-  EXPECT_NE(o.validate().message().find("realistic"), std::string::npos);
+  using testing::refuses;
+  const auto no_trials = [](BlindtestOptions& o) { o.trials = 0; };
+  const auto unknown_effect = [](BlindtestOptions& o) { o.effects = {"gremlins"}; };
+  const auto noise_range_reversed = [](BlindtestOptions& o) {
+    o.realistic = RealisticTruth{};
+    o.realistic->noise_low_mm = 0.2;  // above noise_high_mm
+  };
+  const auto realistic_with_a_model = [](BlindtestOptions& o) {
+    o.realistic = RealisticTruth{};
+    o.realistic->noise_low_mm = 0.03;
+    o.model = ModelDiagnoseOptions{};
+  };
+  EXPECT_TRUE(refuses<BlindtestOptions>(no_trials, "trials"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(unknown_effect, "gremlins"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(noise_range_reversed, "realistic.noise_low_mm"));
+  EXPECT_TRUE(refuses<BlindtestOptions>(realistic_with_a_model, "realistic"));
 }
 
 }  // namespace

@@ -11,11 +11,11 @@
 #include "diagnosis/blindtest.hpp"
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
+#include "testing/refusals.hpp"
+#include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
-
-constexpr double kSettle = 150.0;  // shorter than the default 600 s, the same for data and model
 
 struct Case {
   std::string effect;
@@ -28,14 +28,8 @@ std::vector<Recording> simulate_lab(const ConcealedEffect& truth) {
   std::vector<Recording> out;
   for (const char* name : {"op1", "op3"}) {
     scenarios::Scenario s = lab;
-    scenarios::ExperimentSpec e = *lab.find_experiment(name);
-    e.duration_s = 80.0;
-    scenarios::SensorSpec sensors = s.sensors;
-    sensors.noise_std_mm = 0.05;
-    sensors.seed = 11;
-    e.sensors = sensors;
-    scenarios::SimulateOptions so;
-    so.settle_time = kSettle;
+    scenarios::ExperimentSpec e = short_experiment(lab, name, 80.0, s.sensors, 0.05, 11);
+    const scenarios::SimulateOptions so = settled_run();
     double inflow = 0.0;
     if (truth.effect == "lateral_outflow") {
       scenarios::ExperimentSpec steady = e;
@@ -51,9 +45,7 @@ std::vector<Recording> simulate_lab(const ConcealedEffect& truth) {
 }
 
 DiagnoseOptions fast_options(const std::vector<std::string>& candidates) {
-  DiagnoseOptions o;
-  o.candidates = candidates;
-  o.settle_time_s = kSettle;
+  DiagnoseOptions o = among(candidates);
   o.max_evaluations = 5;
   return o;
 }
@@ -192,16 +184,16 @@ TEST(Diagnose, MismatchedRecordingsAreNamedWithTheReason) {
 }
 
 TEST(Diagnose, InvalidOptionsNameTheField) {
-  DiagnoseOptions o;
-  o.fit_fraction = 1.5;
-  EXPECT_NE(o.validate().message().find("fit_fraction"), std::string::npos);
-  o = {};
-  o.candidates = {"gremlins"};
-  EXPECT_NE(o.validate().message().find("gremlins"), std::string::npos);
-  o = {};
-  o.primary = "q_lps";
-  o.channels = {"y_dwe_mm"};
-  EXPECT_NE(o.validate().message().find("channels"), std::string::npos);
+  using testing::refuses;
+  const auto fraction_above_one = [](DiagnoseOptions& o) { o.fit_fraction = 1.5; };
+  const auto unknown_candidate = [](DiagnoseOptions& o) { o.candidates = {"gremlins"}; };
+  const auto primary_not_compared = [](DiagnoseOptions& o) {
+    o.primary = "q_lps";
+    o.channels = {"y_dwe_mm"};
+  };
+  EXPECT_TRUE(refuses<DiagnoseOptions>(fraction_above_one, "fit_fraction"));
+  EXPECT_TRUE(refuses<DiagnoseOptions>(unknown_candidate, "gremlins"));
+  EXPECT_TRUE(refuses<DiagnoseOptions>(primary_not_compared, "channels"));
 }
 
 }  // namespace

@@ -14,11 +14,10 @@
 #include "scenarios/builtin.hpp"
 #include "scenarios/outside_catalog.hpp"
 #include "scenarios/simulate.hpp"
+#include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
-
-constexpr double kSettle = 150.0;
 
 // The operating point's steady inflow: lateral_outflow's reference (as the blind test takes it).
 double nominal_inflow_m3s(const scenarios::Scenario& lab, scenarios::ExperimentSpec e) {
@@ -35,26 +34,12 @@ std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, con
   std::vector<Recording> out;
   for (const char* name : experiments) {
     scenarios::Scenario s = truth;
-    scenarios::ExperimentSpec e = *lab.find_experiment(name);
-    e.duration_s = duration_s;
-    scenarios::SensorSpec sensors = s.sensors;
-    sensors.noise_std_mm = 0.05;
-    sensors.seed = 17;
-    e.sensors = sensors;
-    scenarios::SimulateOptions so;
-    so.settle_time = kSettle;
-    Recording r = simulate_concealed(s, e, concealed, nominal_inflow_m3s(lab, e), so);
+    const scenarios::ExperimentSpec e = short_experiment(lab, name, duration_s, s.sensors, 0.05, 17);
+    Recording r = simulate_concealed(s, e, concealed, nominal_inflow_m3s(lab, e), settled_run());
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }
   return out;
-}
-
-DiagnoseOptions options(const std::vector<std::string>& candidates) {
-  DiagnoseOptions o;
-  o.candidates = candidates;
-  o.settle_time_s = kSettle;
-  return o;
 }
 
 const ExplainedEffect* in_explanation(const Diagnosis& d, const std::string& name) {
@@ -79,7 +64,7 @@ const ExplainedEffect* expect_explained(const Diagnosis& d, const std::string& n
 TEST(Explanation, NamesBothOfTwoConcealedEffectsWithJointlyRefittedParameters) {
   const auto recordings = record({{"command_delay", 1.2}, {"discharge_coefficient", 0.86}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
+                               among({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   ASSERT_GE(d.explanation.size(), 2u) << d.reason;
   EXPECT_EQ(d.explanation.front().name, d.verdict);  // the verdict stays the largest
@@ -105,7 +90,7 @@ TEST(Explanation, NamesBothOfTwoConcealedEffectsWithJointlyRefittedParameters) {
 TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) {
   const auto recordings = record({{"gate_leakage", 2.5}, {"downstream_gate", -1.5}}, {"op1", "op2", "op3", "op4"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"gate_leakage", "downstream_gate", "discharge_coefficient", "friction",
+                               among({"gate_leakage", "downstream_gate", "discharge_coefficient", "friction",
                                         "lateral_outflow", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   // The diagnosis' own model is the truth here: the joint optimum is the truth itself.
@@ -124,7 +109,7 @@ TEST(Explanation, TwoEffectsThatShiftTheLevelsAlikeAreSeparatedByTheirJointFit) 
 TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
   const auto recordings = record({{"gate_leakage", 2.5}, {"lateral_outflow", 0.08}}, {"op1", "op2", "op3", "op4"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"gate_leakage", "lateral_outflow", "downstream_gate", "level_datum"}));
+                               among({"gate_leakage", "lateral_outflow", "downstream_gate", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   expect_explained(d, "gate_leakage", 2.5, 0.1);
   expect_explained(d, "lateral_outflow", 0.08, 0.1);
@@ -138,7 +123,7 @@ TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
 TEST(Explanation, OneEffectIsExplainedByItselfAlone) {
   const auto recordings = record({{"discharge_coefficient", 0.86}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
+                               among({"command_delay", "discharge_coefficient", "gate_leakage", "level_datum"}));
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "discharge_coefficient");
   ASSERT_EQ(d.explanation.size(), 1u) << d.explanation.back().name;
@@ -156,7 +141,7 @@ TEST(FormAcrossRecordings, ASeepageThatGrowsWithTheDepthIsNotTheCatalogsConstant
   scenarios::Scenario seeping = scenarios::builtin_scenario("lab");
   scenarios::add_depth_seepage(seeping, 0.10);
   const auto recordings = record({}, {"op1", "op2"}, 160.0, seeping);
-  const DiagnoseOptions o = options({"lateral_outflow", "discharge_coefficient", "gate_leakage"});
+  const DiagnoseOptions o = among({"lateral_outflow", "discharge_coefficient", "gate_leakage"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings, o);
   ASSERT_TRUE(d.ok) << d.message;
   ASSERT_TRUE(d.form.has_value()) << d.verdict << ": " << d.reason;
@@ -174,7 +159,7 @@ TEST(FormAcrossRecordings, ASeepageThatGrowsWithTheDepthIsNotTheCatalogsConstant
 TEST(FormAcrossRecordings, AConstantShareOfTheInflowHoldsAtEveryOperatingPoint) {
   const auto recordings = record({{"lateral_outflow", 0.08}}, {"op1", "op3"});
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"lateral_outflow", "discharge_coefficient", "gate_leakage"}));
+                               among({"lateral_outflow", "discharge_coefficient", "gate_leakage"}));
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_EQ(d.verdict, "lateral_outflow") << d.reason;
   ASSERT_TRUE(d.form.has_value());
@@ -210,7 +195,7 @@ TEST(FormAcrossRecordings, TheRuleNeedsASpreadBeyondItsShareItsDeviationsAndTheM
 TEST(Explanation, LeakAndDischargeCoefficientAtOneOpeningAreAnAmbiguousPair) {
   const auto recordings = record({{"gate_leakage", 0.8}}, {"op2"}, 120.0);
   const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings,
-                               options({"gate_leakage", "discharge_coefficient"}));
+                               among({"gate_leakage", "discharge_coefficient"}));
   ASSERT_TRUE(d.ok) << d.message;
   ASSERT_EQ(d.ambiguous.size(), 1u) << d.verdict << ": " << d.reason;
   const AmbiguousPair& a = d.ambiguous.front();
@@ -227,7 +212,7 @@ TEST(Explanation, LeakAndDischargeCoefficientAtOneOpeningAreAnAmbiguousPair) {
 TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
   const auto recordings = record({{"downstream_gate", 0.8}}, {"op1", "op3"}, 120.0);
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
-  DiagnoseOptions o = options({"downstream_gate", "level_datum"});
+  DiagnoseOptions o = among({"downstream_gate", "level_datum"});
   const Diagnosis uncalibrated = diagnose(lab, recordings, o);
   ASSERT_TRUE(uncalibrated.ok) << uncalibrated.message;
   EXPECT_EQ(uncalibrated.verdict, "downstream_gate");
@@ -249,7 +234,7 @@ TEST(Explanation, AnEffectWithinTheCalibrationsUncertaintyIsNotMaterial) {
 // are named.
 TEST(Explanation, ALeakBesideAFreeDischargeCoefficientIsNotJudgedAgainstTheCoefficientsTolerance) {
   const auto recordings = record({{"discharge_coefficient", 0.85}, {"gate_leakage", 1.0}}, {"op1", "op2", "op3", "op4"});
-  DiagnoseOptions o = options({"discharge_coefficient", "gate_leakage", "downstream_gate", "level_datum"});
+  DiagnoseOptions o = among({"discharge_coefficient", "gate_leakage", "downstream_gate", "level_datum"});
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   o.calibrated_std = {{"cd_free", 0.02 * lab.head_gate->discharge_coefficient},
                       {"cd_submerged", 0.02 * lab.head_gate->submerged_coefficient()}};

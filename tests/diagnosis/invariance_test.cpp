@@ -26,11 +26,11 @@
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
 #include "testing/realistic.hpp"
+#include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
 
-constexpr double kSettle = 150.0;
 constexpr double kCountsPerMm = 1.0 / 0.13;  // an encoder of 0.13 mm per count
 const ConcealedEffect kTruth{"gate_rate_limit", 3.0};  // mm/s
 
@@ -42,17 +42,9 @@ std::vector<Recording> truth_recordings(const std::vector<std::string>& experime
   std::vector<Recording> out;
   for (const std::string& name : experiments) {
     scenarios::Scenario s = testing::independent_truth(lab);
-    scenarios::ExperimentSpec e = *lab.find_experiment(name);
-    e.duration_s = 160.0;
+    scenarios::ExperimentSpec e = short_experiment(lab, name, 160.0, s.sensors, 0.05, 5);
     e.input.prbs_clock_s = 2.0;
-    scenarios::SensorSpec sensors = s.sensors;
-    sensors.noise_std_mm = 0.05;
-    sensors.seed = 5;
-    e.sensors = sensors;
-    scenarios::SimulateOptions so;
-    so.settle_time = kSettle;
-    so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
-    Recording r = simulate_concealed(s, e, {kTruth}, 0.0, so);
+    Recording r = simulate_concealed(s, e, {kTruth}, 0.0, settled_run(/*quiet=*/true));
     r.source = name + ".csv";
     // What a logger has: levels and the command (no flow or regime), the gate position if asked.
     Recording logged;
@@ -141,10 +133,8 @@ void expect_scenario_invariance(bool gate_position) {
     SCOPED_TRACE(v.name + (gate_position ? ", gate position recorded" : ", levels only"));
     scenarios::Scenario lab = scenarios::builtin_scenario("lab");
     lab.sensors.period_s = v.period_s;  // the logger's period, as a user's scenario would state it
-    DiagnoseOptions o;
-    o.candidates = {"gate_rate_limit", "sensor_delay", "discharge_coefficient", "sensor_offset"};
-    o.settle_time_s = kSettle;
-    const Diagnosis d = diagnose(lab, v.recordings, o);
+    const Diagnosis d =
+        diagnose(lab, v.recordings, among({"gate_rate_limit", "sensor_delay", "discharge_coefficient", "sensor_offset"}));
     ASSERT_TRUE(d.ok) << d.message;
     estimates.push_back(named_estimate(d));
   }

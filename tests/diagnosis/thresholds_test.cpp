@@ -16,11 +16,10 @@
 #include "scenarios/builtin.hpp"
 #include "scenarios/simulate.hpp"
 #include "testing/realistic.hpp"
+#include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
 namespace {
-
-constexpr double kSettle = 150.0;
 
 std::vector<Recording> ideal_truth_recordings() {
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
@@ -29,16 +28,10 @@ std::vector<Recording> ideal_truth_recordings() {
   truth.downstream.gate.opening_m += 0.6e-3;
   std::vector<Recording> out;
   for (const char* name : {"op1", "op3"}) {
-    scenarios::ExperimentSpec e = *lab.find_experiment(name);
-    e.duration_s = 100.0;
     scenarios::SensorSpec ideal = lab.sensors;
     ideal.resolution_mm = 0.0;
-    ideal.noise_std_mm = 0.0;
-    e.sensors = ideal;
-    scenarios::SimulateOptions so;
-    so.settle_time = kSettle;
-    so.warning = [](const std::string&) {};  // the truth's minmod grid falls back to time marching
-    Recording r = scenarios::simulate(truth, e, so);
+    const scenarios::ExperimentSpec e = short_experiment(lab, name, 100.0, ideal, 0.0, ideal.seed);
+    Recording r = scenarios::simulate(truth, e, settled_run(/*quiet=*/true));
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }
@@ -56,13 +49,6 @@ std::vector<Recording> logged(const std::vector<Recording>& ideal, const std::ve
   return out;
 }
 
-DiagnoseOptions options(const std::vector<std::string>& candidates) {
-  DiagnoseOptions o;
-  o.candidates = candidates;
-  o.settle_time_s = kSettle;
-  return o;
-}
-
 // The parameter `factor` times as far from "no effect" as the threshold, on the side it reports.
 double scaled(const DetectionThreshold& t, double factor) {
   const Effect e = *effect_from_name(t.effect);
@@ -76,7 +62,7 @@ TEST(Thresholds, AnEffectAtTwiceItsThresholdIsNamedAndAtHalfItIsNot) {
   const std::vector<std::string> candidates = {"sensor_offset[y_dwe_mm]", "sensor_drift[y_up_mm]", "sensor_scale[y_dw_mm]",
                                                "sensor_delay[y_dwe_mm]", "command_delay"};
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
-  const Diagnosis clean = diagnose(lab, logged(ideal, {}, 101), options(candidates));
+  const Diagnosis clean = diagnose(lab, logged(ideal, {}, 101), among(candidates));
   ASSERT_TRUE(clean.ok) << clean.message;
   ASSERT_EQ(clean.thresholds.size(), candidates.size());
   int twice_named = 0, half_named = 0, trials = 0;
@@ -87,8 +73,8 @@ TEST(Thresholds, AnEffectAtTwiceItsThresholdIsNamedAndAtHalfItIsNot) {
     std::cout << "[ thresholds ] " << t.effect << " " << t.below << " / " << t.above << " " << t.unit << " (material "
               << e.kind->material << ")\n";
     for (int k = 0; k < 2; ++k, seed += 10) {
-      const Diagnosis twice = diagnose(lab, logged(ideal, {{t.effect, scaled(t, 2.0)}}, seed), options(candidates));
-      const Diagnosis half = diagnose(lab, logged(ideal, {{t.effect, scaled(t, 0.5)}}, seed + 5), options(candidates));
+      const Diagnosis twice = diagnose(lab, logged(ideal, {{t.effect, scaled(t, 2.0)}}, seed), among(candidates));
+      const Diagnosis half = diagnose(lab, logged(ideal, {{t.effect, scaled(t, 0.5)}}, seed + 5), among(candidates));
       twice_named += twice.verdict == t.effect;
       half_named += half.verdict == t.effect;
       ++trials;

@@ -4,6 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
+#include "testing/recordings.hpp"
+#include "testing/refusals.hpp"
+
 namespace canalsim::reduced {
 namespace {
 
@@ -125,28 +130,17 @@ TEST(DeclaredUnits, CountsAndCentimetresAreConvertedToMillimetres) {
   EXPECT_EQ(declared_gain_unit(d), "cm/counts");
 }
 
+// prepare_data refuses `rec` with one InputError that says `expected`.
+void expect_refused(const Recording& rec, const std::string& expected) {
+  EXPECT_TRUE(testing::refuses_input([&] { (void)prepare_data(rec); }, expected));
+}
+
 TEST(DeclaredUnits, AUnitWithoutAScaleOrABadScaleIsAnErrorNamingTheKey) {
-  Recording rec;
-  rec.source = "counts.csv";
-  rec.set_column("t_s", {0.0, 0.1, 0.2});
-  rec.set_column("u_mm", {100.0, 150.0, 150.0});
-  rec.set_column("y_dwe_mm", {45.0, 45.0, 46.0});
+  Recording rec = testing::command_and_level("counts.csv", {0.0, 0.1, 0.2}, {100.0, 150.0, 150.0}, {45.0, 45.0, 46.0});
   rec.set_meta("u_unit", "counts");
-  try {
-    prepare_data(rec);
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("counts.csv: metadata u_unit: counts needs u_scale_mm_per_unit"),
-              std::string::npos) << e.what();
-  }
+  expect_refused(rec, "counts.csv: metadata u_unit: counts needs u_scale_mm_per_unit");
   rec.set_meta("u_scale_mm_per_unit", "-1");
-  try {
-    prepare_data(rec);
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("u_scale_mm_per_unit: '-1': expected a number of mm per unit in [1e-06, 1000000]"),
-              std::string::npos) << e.what();
-  }
+  expect_refused(rec, "u_scale_mm_per_unit: '-1': expected a number of mm per unit in [1e-06, 1000000]");
 }
 
 }  // namespace

@@ -22,10 +22,13 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include "core/errors.hpp"
 #include "reduced_models/identification.hpp"
+#include "testing/recordings.hpp"
 #include "testing/synthetic.hpp"
+#include "testing/refusals.hpp"
 
 namespace canalsim::reduced {
 namespace {
@@ -90,12 +93,7 @@ ExperimentData recording(const std::vector<double>& level, double sigma, unsigne
     y[k] = level[k] + sigma * noise(rng);
     if (quantum > 0.0) y[k] = quantise(y[k], quantum);
   }
-  Recording rec;
-  rec.source = "truth.csv";
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", command());
-  rec.set_column("y_dwe_mm", y);
-  return prepare_data(rec);
+  return prepare_data(testing::command_and_level("truth.csv", std::move(t), command(), std::move(y)));
 }
 
 std::size_t index_of(const FitResult& r, const std::string& name) {
@@ -219,18 +217,9 @@ TEST(FitStatistics, StdScalesWithTheNoise) {
 }
 
 TEST(FitStatistics, ThreeSamplesAreTooFewToFit) {
-  Recording rec;
-  rec.source = "few.csv";
-  rec.set_column("t_s", {0.0, 0.13, 0.26});
-  rec.set_column("u_mm", {20.0, 25.0, 25.0});
-  rec.set_column("y_dwe_mm", {45.0, 45.0, 45.5});
-  const ExperimentData data = prepare_data(rec);
-  try {
-    (void)fit(ModelKind::lfom, data);
-    FAIL() << "a 3-sample recording was fitted";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("too few"), std::string::npos) << e.what();
-  }
+  const ExperimentData data =
+      prepare_data(testing::command_and_level("few.csv", {0.0, 0.13, 0.26}, {20.0, 25.0, 25.0}, {45.0, 45.0, 45.5}));
+  EXPECT_TRUE(testing::refuses_input([&] { (void)fit(ModelKind::lfom, data); }, "too few"));
 }
 
 }  // namespace

@@ -48,9 +48,18 @@ FitResult fit_synthetic(const Model& truth, const SyntheticSpec& spec, FitOption
   return fit(truth.kind, data, options);
 }
 
+// `truth` at the reference head `head_ref_mm` of the nonlinear models.
+Model with_head_ref(Model truth, double head_ref_mm) {
+  truth.p.head_ref_mm = head_ref_mm;
+  return truth;
+}
+
+// `truth` fitted to its response to the default synthetic PRBS experiment: recovered, L within
+// one sample.
+void expect_recovered_from_prbs(const Model& truth) { expect_recovered(truth, fit_synthetic(truth, {}), 0.13); }
+
 TEST(Recovery, LiomParametersAreRecoveredFromANoisyQuantisedPrbsResponse) {
-  const auto truth = make(ModelKind::liom, 0.68, 1.71, 1.0, 0.0, 4.9);
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(make(ModelKind::liom, 0.68, 1.71, 1.0, 0.0, 4.9));
 }
 
 TEST(Recovery, SopdParametersAreRecovered) {
@@ -60,8 +69,7 @@ TEST(Recovery, SopdParametersAreRecovered) {
 }
 
 TEST(Recovery, LfomParametersAreRecovered) {
-  const auto truth = make(ModelKind::lfom, 1.1, 2.06, 0.54, 0.0, 4.9);
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(make(ModelKind::lfom, 1.1, 2.06, 0.54, 0.0, 4.9));
 }
 
 TEST(Recovery, LfomIsRecoveredWithTheGateRateLimitInTheModel) {
@@ -73,27 +81,19 @@ TEST(Recovery, LfomIsRecoveredWithTheGateRateLimitInTheModel) {
 }
 
 TEST(Recovery, NliomFreeParametersIncludingGammaAreRecovered) {
-  auto truth = make(ModelKind::nliom_f, 0.75, 0.63, 1.0, 3.0, 4.9);
-  truth.p.head_ref_mm = 60.0;
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(with_head_ref(make(ModelKind::nliom_f, 0.75, 0.63, 1.0, 3.0, 4.9), 60.0));
 }
 
 TEST(Recovery, NlfomFreeParametersAreRecovered) {
-  auto truth = make(ModelKind::nlfom_f, 0.78, 0.77, 0.57, 3.25, 4.9);
-  truth.p.head_ref_mm = 60.0;
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(with_head_ref(make(ModelKind::nlfom_f, 0.78, 0.77, 0.57, 3.25, 4.9), 60.0));
 }
 
 TEST(Recovery, NliomSubmergedParametersAreRecovered) {
-  auto truth = make(ModelKind::nliom_s, 1.6, 2.1, 1.0, 0.6, 4.9);
-  truth.p.head_ref_mm = 15.0;
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(with_head_ref(make(ModelKind::nliom_s, 1.6, 2.1, 1.0, 0.6, 4.9), 15.0));
 }
 
 TEST(Recovery, NlfomSubmergedParametersAreRecovered) {
-  auto truth = make(ModelKind::nlfom_s, 1.56, 2.3, 0.66, 0.6, 4.9);
-  truth.p.head_ref_mm = 15.0;
-  expect_recovered(truth, fit_synthetic(truth, {}), 0.13);
+  expect_recovered_from_prbs(with_head_ref(make(ModelKind::nlfom_s, 1.56, 2.3, 0.66, 0.6, 4.9), 15.0));
 }
 
 TEST(Recovery, HybridParametersAreRecoveredFromAnExperimentCrossingBothRegimes) {

@@ -12,9 +12,11 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "reduced_models/identification.hpp"
 #include "testing/realistic.hpp"
+#include "testing/recordings.hpp"
 
 namespace canalsim::reduced {
 namespace {
@@ -30,12 +32,7 @@ Recording two_lag_step(double K, double T1, double T2, double L) {
     const double tau = t[k] - kStep - L;
     y[k] = 45.0 + (tau > 0.0 ? K * kA * (1.0 - (T1 * std::exp(-tau / T1) - T2 * std::exp(-tau / T2)) / (T1 - T2)) : 0.0);
   }
-  Recording rec;
-  rec.source = "two_lags.csv";
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", u);
-  rec.set_column("y_dwe_mm", y);
-  return rec;
+  return testing::command_and_level("two_lags.csv", std::move(t), std::move(u), std::move(y));
 }
 
 struct IndependentFit {

@@ -12,11 +12,16 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "reduced_models/frequency.hpp"
 #include "tests/reduced_models/crb.hpp"
 #include "reduced_models/identification.hpp"
+#include "testing/recordings.hpp"
 #include "testing/synthetic.hpp"
 
 namespace canalsim::reduced {
@@ -27,29 +32,36 @@ struct StepTest {
   std::size_t step_sample = 40;  // u steps at this sample
 };
 
-// The recording of a gate step of A = 5 mm seen by a level sensor with noise σ = 0.03 mm and
-// resolution 0.1 mm on a grid offset by 0.037 mm (a sensor zero that is not a multiple of the
-// resolution), long enough to settle (five time constants after the delay).
-Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
-  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037;
-  const double t_step = static_cast<double>(s.step_sample) * s.h;
-  const auto n = static_cast<std::size_t>(std::ceil((t_step + s.L + 5.0 * s.T + 5.0) / s.h));
-  std::mt19937 rng(seed);
+// A gate step of kA = 5 mm from 20 mm at t_step, n samples every h: the level 45 mm plus
+// `response(t − t_step − L)` once that is positive (a closed form), read by a level sensor with
+// noise σ = 0.03 mm and resolution 0.1 mm on a grid offset by 0.037 mm (a sensor zero that is not
+// a multiple of the resolution) seeded with `seed`, or exactly without one.
+constexpr double kA = 5.0;
+
+template <class Response>
+Recording step_recording(const std::string& source, std::size_t n, double h, double t_step, double L,
+                         std::optional<unsigned> seed, Response response) {
+  const double u0 = 20.0, y0 = 45.0, r = 0.1, offset = 0.037;
+  std::mt19937 rng(seed.value_or(0));
   std::normal_distribution<double> noise(0.0, 0.03);
   std::vector<double> t(n), u(n), y(n);
   for (std::size_t k = 0; k < n; ++k) {
-    t[k] = static_cast<double>(k) * s.h;
-    u[k] = k >= s.step_sample ? u0 + A : u0;
-    const double since = t[k] - t_step - s.L;
-    const double level = y0 + (since > 0.0 ? s.K * A * (1.0 - std::exp(-since / s.T)) : 0.0);
-    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
+    t[k] = static_cast<double>(k) * h;
+    u[k] = t[k] >= t_step - 1e-9 ? u0 + kA : u0;
+    const double since = t[k] - t_step - L;
+    const double level = y0 + (since > 0.0 ? response(since) : 0.0);
+    y[k] = seed ? r * std::round((level + noise(rng) - offset) / r) + offset : level;
   }
-  Recording rec;
-  rec.source = "fopdt.csv";
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", u);
-  rec.set_column("y_dwe_mm", y);
-  return rec;
+  return testing::command_and_level(source, std::move(t), std::move(u), std::move(y));
+}
+
+// The first-order-plus-delay step of `s`, long enough to settle (five time constants after the
+// delay), read by the noisy quantising sensor.
+Recording fopdt_step_recording(const StepTest& s, unsigned seed = 3) {
+  const double t_step = static_cast<double>(s.step_sample) * s.h;
+  const auto n = static_cast<std::size_t>(std::ceil((t_step + s.L + 5.0 * s.T + 5.0) / s.h));
+  return step_recording("fopdt.csv", n, s.h, t_step, s.L, seed,
+                        [&s](double since) { return s.K * kA * (1.0 - std::exp(-since / s.T)); });
 }
 
 // The paper's IAE fit: K and T within 5 %; L within two samples, or T/250 when that is longer.
@@ -116,28 +128,37 @@ void expect_delay_at_the_bound(const StepTest& s) {
   EXPECT_NEAR(r.model.p.L, s.L, tolerance);
 }
 
+// Which side of two samples three bound std of a case's delay lie.
+enum class Bound { within_two_samples, wider_than_two_samples };
+
+// Each case's bound is on the side `bound` says, and its delay is recovered to it.
+void expect_delays_at_the_bound(const std::vector<StepTest>& cases, Bound bound) {
+  for (const StepTest& s : cases) {
+    if (bound == Bound::within_two_samples) {
+      EXPECT_LE(3.0 * delay_bound(s), 2.0 * s.h);
+    } else {
+      EXPECT_GT(3.0 * delay_bound(s), 2.0 * s.h);
+    }
+    expect_delay_at_the_bound(s);
+  }
+}
+
 // Where two samples are at least three bound std, L is recovered within two samples: every
 // case at 0.125 s up to T = 60 s, at 0.01 s the fast pools and T = 20 s with L ≥ 3 s.
 TEST(DelayPrecision, TheDelayIsWithinTwoSamplesWhereTheCramerRaoBoundAllowsIt) {
-  for (const StepTest s : {StepTest{2.0, 2.0, 0.5, 0.125}, StepTest{2.0, 20.0, 3.0, 0.125},
-                           StepTest{2.0, 60.0, 12.0, 0.125}, StepTest{1.3, 60.0, 0.5, 0.125},
-                           StepTest{2.0, 2.0, 12.0, 0.01}, StepTest{2.0, 20.0, 3.0, 0.01},
-                           StepTest{2.0, 20.0, 12.0, 0.01}}) {
-    EXPECT_LE(3.0 * delay_bound(s), 2.0 * s.h);
-    expect_delay_at_the_bound(s);
-  }
+  expect_delays_at_the_bound({{2.0, 2.0, 0.5, 0.125}, {2.0, 20.0, 3.0, 0.125}, {2.0, 60.0, 12.0, 0.125},
+                              {1.3, 60.0, 0.5, 0.125}, {2.0, 2.0, 12.0, 0.01}, {2.0, 20.0, 3.0, 0.01},
+                              {2.0, 20.0, 12.0, 0.01}},
+                             Bound::within_two_samples);
 }
 
 // Where the bound is wider than two samples (slow pools: the level leaves y0 at K A/T mm/s, under
 // the 0.03 mm noise and 0.1 mm resolution), L is recovered within three bound std.
 TEST(DelayPrecision, ASlowPoolsDelayIsWithinThreeCramerRaoStdWhereThatIsWiderThanTwoSamples) {
-  for (const StepTest s : {StepTest{2.0, 300.0, 0.5, 0.125}, StepTest{2.0, 300.0, 12.0, 0.125},
-                           StepTest{2.0, 20.0, 0.5, 0.01}, StepTest{2.0, 60.0, 0.5, 0.01},
-                           StepTest{2.0, 60.0, 12.0, 0.01}, StepTest{2.0, 300.0, 3.0, 0.01},
-                           StepTest{2.0, 300.0, 12.0, 0.01}}) {
-    EXPECT_GT(3.0 * delay_bound(s), 2.0 * s.h);
-    expect_delay_at_the_bound(s);
-  }
+  expect_delays_at_the_bound({{2.0, 300.0, 0.5, 0.125}, {2.0, 300.0, 12.0, 0.125}, {2.0, 20.0, 0.5, 0.01},
+                              {2.0, 60.0, 0.5, 0.01}, {2.0, 60.0, 12.0, 0.01}, {2.0, 300.0, 3.0, 0.01},
+                              {2.0, 300.0, 12.0, 0.01}},
+                             Bound::wider_than_two_samples);
 }
 
 // The bound's ingredients: a fine quantiser loses no information (1/σ² per sample), a coarse one
@@ -166,20 +187,10 @@ TEST(TimeScale, CoarseSamplingDoesNotBiasTheDelayOrTheTimeConstant) {
   for (const double h : {0.125, 1.0}) {
     for (const double T : {3.0, 20.0}) {
       SCOPED_TRACE("h " + std::to_string(h) + " s, T " + std::to_string(T) + " s");
-      const double L = 3.3, K = 2.0, A = 5.0, t_step = 10.0 * h;
+      const double L = 3.3, K = 2.0, t_step = 10.0 * h;
       const auto n = static_cast<std::size_t>((t_step + L + 8.0 * T) / h);
-      std::vector<double> t(n), u(n), y(n);
-      for (std::size_t k = 0; k < n; ++k) {
-        t[k] = static_cast<double>(k) * h;
-        u[k] = k >= 10 ? 20.0 + A : 20.0;
-        const double since = t[k] - t_step - L;
-        y[k] = 45.0 + (since > 0.0 ? K * A * (1.0 - std::exp(-since / T)) : 0.0);
-      }
-      Recording rec;
-      rec.source = "clean.csv";
-      rec.set_column("t_s", t);
-      rec.set_column("u_mm", u);
-      rec.set_column("y_dwe_mm", y);
+      const Recording rec = step_recording("clean.csv", n, h, t_step, L, std::nullopt,
+                                           [&](double since) { return K * kA * (1.0 - std::exp(-since / T)); });
       const auto r = fit(ModelKind::liom, prepare_data(rec));
       EXPECT_NEAR(r.model.p.L, L, 0.1 * h);
       EXPECT_NEAR(r.model.p.T, T, 0.01 * T);
@@ -198,24 +209,8 @@ TEST(TimeScale, AStepAtTheRecordingsSecondSampleFits) {
 // 1999), Δy = K A (t − t_step − L), and IDZ (Litrico & Fromion 2004), Δy = K A (t − t_step − L +
 // Tz) after t_step + L; K in mm/(mm·s). Same sensor as above, 0.125 s sampling, 300 s.
 Recording integrator_step_recording(double K, double Tz, double L, double h) {
-  const double u0 = 20.0, A = 5.0, y0 = 45.0, r = 0.1, offset = 0.037, t_step = 5.0;
-  const auto n = static_cast<std::size_t>(300.0 / h);
-  std::mt19937 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.03);
-  std::vector<double> t(n), u(n), y(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    t[k] = static_cast<double>(k) * h;
-    u[k] = t[k] >= t_step - 1e-9 ? u0 + A : u0;
-    const double since = t[k] - t_step - L;
-    const double level = y0 + (since > 0.0 ? K * A * (since + Tz) : 0.0);
-    y[k] = r * std::round((level + noise(rng) - offset) / r) + offset;
-  }
-  Recording rec;
-  rec.source = "integrator.csv";
-  rec.set_column("t_s", t);
-  rec.set_column("u_mm", u);
-  rec.set_column("y_dwe_mm", y);
-  return rec;
+  return step_recording("integrator.csv", static_cast<std::size_t>(300.0 / h), h, 5.0, L, 5u,
+                        [&](double since) { return K * kA * (since + Tz); });
 }
 
 // On a ramp a delay error is a level offset: the operating point y0 (mean of the quantised rest
@@ -275,15 +270,30 @@ TEST(CanalControlModels, FrequencyResponsesAreTheIntegratorsAndTheZeros) {
   EXPECT_NEAR(std::abs(frequency_response(idz, OperatingPoint{}, 1e4)), 0.02 * 40.0, 1e-4);
 }
 
-// Every pair of nested models on data none of them represents exactly (two lags in series, the
-// gain following the upstream level): the model that contains another fits at least as well.
-TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
+// Data none of the nested models represents exactly: two lags in series, the gain following the
+// upstream level.
+ExperimentData two_lags_with_upstream_gain() {
   Model truth{ModelKind::sopd, {}, {}};
   testing::set_parameters(truth, {{"K", 0.8}, {"T", 3.0}, {"T2", 0.8}, {"L", 2.5}});
   testing::SyntheticSpec spec;
   spec.n = 1500;
   spec.y_up_swing = 8.0;
-  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  return prepare_data(testing::synthetic_recording(truth, spec));
+}
+
+// Of each (outer, inner) pair the outer model, which contains the inner one, fits at least as
+// well: its cost is at most the inner one's (to rounding).
+void expect_no_worse_than_contained(std::map<ModelKind, double>& cost,
+                                    const std::vector<std::pair<ModelKind, ModelKind>>& pairs) {
+  for (const auto& [outer, inner] : pairs) {
+    EXPECT_LE(cost[outer], cost[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
+  }
+}
+
+// Every pair of nested models on data none of them represents exactly (two lags in series, the
+// gain following the upstream level): the model that contains another fits at least as well.
+TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
+  const ExperimentData data = two_lags_with_upstream_gain();
   FitOptions o;
   o.actuation.quantum_mm = 0.05;
   std::map<ModelKind, double> iae;
@@ -297,20 +307,13 @@ TEST(NestedModels, AModelNeverFitsWorseThanAModelItContains) {
       {ModelKind::nlfom_f, ModelKind::lfom},  {ModelKind::nlfom_f, ModelKind::liom},
       {ModelKind::nlfom_s, ModelKind::nliom_s}, {ModelKind::nlfom_s, ModelKind::lfom},
       {ModelKind::nlfom_s, ModelKind::liom}};
-  for (const auto& [outer, inner] : pairs) {
-    EXPECT_LE(iae[outer], iae[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
-  }
+  expect_no_worse_than_contained(iae, pairs);
 }
 
 // The same under the least-squares criterion (its sum of squares, with the fitted offsets and the
 // sensor's mean reading), for the models it polishes.
 TEST(NestedModels, UnderLeastSquaresAModelNeverFitsWorseThanAModelItContains) {
-  Model truth{ModelKind::sopd, {}, {}};
-  testing::set_parameters(truth, {{"K", 0.8}, {"T", 3.0}, {"T2", 0.8}, {"L", 2.5}});
-  testing::SyntheticSpec spec;
-  spec.n = 1500;
-  spec.y_up_swing = 8.0;
-  const auto data = prepare_data(testing::synthetic_recording(truth, spec));
+  const ExperimentData data = two_lags_with_upstream_gain();
   FitOptions o;
   o.criterion = Criterion::least_squares;
   std::map<ModelKind, double> cost;
@@ -320,9 +323,7 @@ TEST(NestedModels, UnderLeastSquaresAModelNeverFitsWorseThanAModelItContains) {
   const std::vector<std::pair<ModelKind, ModelKind>> pairs = {
       {ModelKind::lfom, ModelKind::liom}, {ModelKind::nliom_f, ModelKind::liom},
       {ModelKind::nlfom_f, ModelKind::nliom_f}, {ModelKind::nlfom_f, ModelKind::lfom}};
-  for (const auto& [outer, inner] : pairs) {
-    EXPECT_LE(cost[outer], cost[inner] * (1.0 + 1e-9)) << model_name(outer) << " vs " << model_name(inner);
-  }
+  expect_no_worse_than_contained(cost, pairs);
 }
 
 }  // namespace

@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "testing/refusals.hpp"
+
 namespace canalsim {
 namespace {
 
@@ -162,13 +164,13 @@ TEST(PrbsSignal, JumpsAreTheClockEdgesWhereTheBitChanges) {
 }
 
 TEST(PrbsOptions, ValidationNamesTheField) {
+  using testing::validation_message;
+  EXPECT_TRUE(PrbsOptions{}.validate());
+  EXPECT_EQ(validation_message<PrbsOptions>([](auto& o) { o.stages = 21; }), "stages = 21: expected an integer in [2, 20]");
+  EXPECT_EQ(validation_message<PrbsOptions>([](auto& o) { o.clock_period = 0.0; }),
+            "clock_period = 0: expected a value in (0, 3600] s");
   PrbsOptions options;
-  EXPECT_TRUE(options.validate());
-  options.stages = 21;
-  EXPECT_EQ(options.validate().message(), "stages = 21: expected an integer in [2, 20]");
-  options = {};
   options.clock_period = 0.0;
-  EXPECT_EQ(options.validate().message(), "clock_period = 0: expected a value in (0, 3600] s");
   EXPECT_THROW(PrbsSignal{options}, std::invalid_argument);
 }
 

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "core/recording.hpp"
+#include "testing/refusals.hpp"
 
 namespace canalsim::scenarios {
 namespace {
@@ -36,12 +37,7 @@ operating_opening_mm = 25
 )";
 
 std::string error_of(const std::string& text) {
-  try {
-    parse_scenario(text, "s.toml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no error";
+  return testing::input_error_of([&] { (void)parse_scenario(text, "s.toml"); }, "no error");
 }
 
 std::string with(const std::string& extra_after_pools) {

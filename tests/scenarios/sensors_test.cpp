@@ -7,6 +7,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "testing/refusals.hpp"
+
 namespace canalsim {
 namespace {
 
@@ -166,16 +168,16 @@ TEST(SensorOptions, DefaultsPerKind) {
 }
 
 TEST(SensorOptions, ValidationNamesTheFieldAndRange) {
+  using testing::validation_message;
+  EXPECT_TRUE(SensorOptions{}.validate());
+  EXPECT_EQ(validation_message<SensorOptions>([](auto& o) { o.sample_period = 0.0; }),
+            "sample_period = 0: expected a value in (0, 3600] s");
+  EXPECT_EQ(validation_message<SensorOptions>([](auto& o) { o.noise_std = -1.0; }),
+            "noise_std = -1: expected a value in [0, 100]");
+  EXPECT_EQ(validation_message<SensorOptions>([](auto& o) { o.delay = 700.0; }),
+            "delay = 700: expected a value in [-600, 600] s");
   SensorOptions options;
-  EXPECT_TRUE(options.validate());
-  options.sample_period = 0.0;
-  EXPECT_EQ(options.validate().message(), "sample_period = 0: expected a value in (0, 3600] s");
-  options = {};
-  options.noise_std = -1.0;
-  EXPECT_EQ(options.validate().message(), "noise_std = -1: expected a value in [0, 100]");
-  options = {};
   options.delay = 700.0;
-  EXPECT_EQ(options.validate().message(), "delay = 700: expected a value in [-600, 600] s");
   EXPECT_THROW(Sensor{options}, std::invalid_argument);
 }
 

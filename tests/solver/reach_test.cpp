@@ -9,20 +9,28 @@
 #include <stdexcept>
 
 #include "solver/canal.hpp"
+#include "testing/reaches.hpp"
 
 namespace canalsim::solver {
 namespace {
 
 // A 10 m reach of 10 cells, 1 m deep at rest, walls at both ends.
 void walled_tank(Canal& canal, const Section& section) {
-  ReachSpec spec;
-  spec.length = 10.0;
-  spec.cells = 10;
-  spec.section = section;
-  spec.initial_depth.assign(10, 1.0);
-  ASSERT_TRUE(canal.add_reach(spec));
+  ASSERT_TRUE(canal.add_reach(testing::uniform_reach(10.0, 10, section, 0.0, 1.0)));
   ASSERT_TRUE(canal.set_boundary(0, End::upstream, std::make_shared<WallBoundary>()));
   ASSERT_TRUE(canal.set_boundary(0, End::downstream, std::make_shared<WallBoundary>()));
+}
+
+// The walled tank drained through its outlet: the mean depth within 0.5 mm of the closed form's
+// `depth`, the outlet passing `law_discharge` (its law at its cell's depth), and the volume that
+// left booked as lateral outflow with the balance closed to round-off.
+void expect_drained(const Canal& canal, double depth, double law_discharge) {
+  const double mean_depth = canal.reach(0).volume() / 10.0;
+  EXPECT_NEAR(mean_depth, depth, 5e-4);
+  EXPECT_NEAR(canal.reach(0).outlet_discharge(0), law_discharge, 1e-15);
+  const VolumeBalance b = canal.total_balance();
+  EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
+  EXPECT_LT(b.relative_error(), 1e-12);
 }
 
 TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
@@ -35,12 +43,7 @@ TEST(Outlets, AnOrificeDrainsAClosedTankAsTorricelliSays) {
   // outlet cell stands a little below the mean (the flow towards the outlet draws it down), so
   // the tank drains slightly slower than the closed form: 0.26 mm of 0.56 m after 500 s.
   const double expected_root = 1.0 - k * 500.0 / (2.0 * 10.0);
-  const double mean_depth = canal.reach(0).volume() / 10.0;
-  EXPECT_NEAR(mean_depth, expected_root * expected_root, 5e-4);
-  EXPECT_NEAR(canal.reach(0).outlet_discharge(0), k * std::sqrt(canal.reach(0).depth(9)), 1e-15);
-  const VolumeBalance b = canal.total_balance();
-  EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
-  EXPECT_LT(b.relative_error(), 1e-12);
+  expect_drained(canal, expected_root * expected_root, k * std::sqrt(canal.reach(0).depth(9)));
 }
 
 // An outlet of exponent 3/2 (a side weir over its invert): A_s dh/dt = −K h^(3/2) integrates to
@@ -53,13 +56,9 @@ TEST(Outlets, AWeirOutletDrainsAClosedTankAsItsClosedFormSays) {
   EXPECT_EQ(canal.reach(0).add_outlet(9, k, 0.0, 1.5), 0);
   ASSERT_TRUE(canal.advance_to(500.0));
   const double expected_inverse_root = 1.0 + k * 500.0 / (2.0 * 10.0);
-  const double mean_depth = canal.reach(0).volume() / 10.0;
   // As for the orifice, the outlet cell stands slightly below the mean.
-  EXPECT_NEAR(mean_depth, 1.0 / (expected_inverse_root * expected_inverse_root), 5e-4);
-  EXPECT_NEAR(canal.reach(0).outlet_discharge(0), k * std::pow(canal.reach(0).depth(9), 1.5), 1e-15);
-  const VolumeBalance b = canal.total_balance();
-  EXPECT_NEAR(b.lateral, -(10.0 - canal.reach(0).volume()), 1e-9);
-  EXPECT_LT(b.relative_error(), 1e-12);
+  expect_drained(canal, 1.0 / (expected_inverse_root * expected_inverse_root),
+                 k * std::pow(canal.reach(0).depth(9), 1.5));
 }
 
 // Below its invert an outlet passes nothing, whatever its exponent; exponents outside [1/2, 3]
@@ -94,15 +93,7 @@ TEST(Outlets, AChangedCoefficientTakesEffectAndZeroStopsTheOutlet) {
 // stage evaluations' sum), and the link passes the same volume out of one reach and into the next.
 TEST(EndWithdrawal, ThroughALinkTheBalanceClosesAndTheLinkCarriesOnlyWhatGoesOn) {
   Canal canal;
-  for (int k = 0; k < 2; ++k) {
-    ReachSpec spec;
-    spec.length = 50.0;
-    spec.cells = 25;
-    spec.section = {1.0, 1.0};
-    spec.manning_n = 0.015;
-    spec.initial_depth.assign(25, 1.0);
-    ASSERT_TRUE(canal.add_reach(spec));
-  }
+  for (int k = 0; k < 2; ++k) ASSERT_TRUE(canal.add_reach(testing::uniform_reach(50.0, 25, {1.0, 1.0}, 0.015, 1.0)));
   ASSERT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.6)));
   ASSERT_TRUE(canal.connect(0, 1, std::make_shared<ContinuousLink>()));
   ASSERT_TRUE(canal.set_boundary(1, End::downstream, FixedLevelBoundary::depth(1.0)));

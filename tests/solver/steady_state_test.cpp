@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "solver/boundary.hpp"
+#include "testing/reaches.hpp"
 
 namespace canalsim::solver {
 namespace {
@@ -195,14 +196,8 @@ TEST(SteadyState, InvalidOptionsNameTheField) {
 // only through a depth dip of about Q_w / (2 c T) — the reason for the face withdrawal
 // (docs/asce-canals.md).
 Canal channel_with_offtake(bool at_end_face) {
-  ReachSpec spec;
-  spec.length = 100.0;
-  spec.cells = 50;
-  spec.section = {1.0, 0.0};
-  spec.manning_n = 0.0;
-  spec.initial_depth.assign(50, 1.0);
   Canal canal;
-  EXPECT_TRUE(canal.add_reach(spec));
+  EXPECT_TRUE(canal.add_reach(testing::uniform_reach(100.0, 50, {1.0, 0.0}, 0.0, 1.0)));
   EXPECT_TRUE(canal.set_boundary(0, End::upstream, FixedDischargeBoundary::constant(0.5)));
   EXPECT_TRUE(canal.set_boundary(0, End::downstream, FixedLevelBoundary::depth(1.0)));
   if (at_end_face) {

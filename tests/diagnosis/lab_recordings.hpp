@@ -1,0 +1,48 @@
+// How the diagnosis tests record the laboratory's experiments: shortened, settled for less than
+// the default 600 s (the same for the recordings and the model that diagnoses them), with level
+// noise drawn from a seed of their own.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "diagnosis/diagnose.hpp"
+#include "scenarios/scenario.hpp"
+#include "scenarios/simulate.hpp"
+
+namespace canalsim::diagnosis {
+
+inline constexpr double kSettle = 150.0;  // s of settling before every run, recorded or diagnosed
+
+// Experiment `name` of `lab`, shortened to `duration_s`, read by `sensors` with Gaussian level
+// noise of `noise_std_mm` drawn from `seed`.
+inline scenarios::ExperimentSpec short_experiment(const scenarios::Scenario& lab, const std::string& name,
+                                                  double duration_s, scenarios::SensorSpec sensors,
+                                                  double noise_std_mm, std::uint64_t seed) {
+  scenarios::ExperimentSpec e = *lab.find_experiment(name);
+  e.duration_s = duration_s;
+  sensors.noise_std_mm = noise_std_mm;
+  sensors.seed = seed;
+  e.sensors = sensors;
+  return e;
+}
+
+// A run that settles for kSettle. `quiet` drops its warnings: a truth on the other limiter's
+// finer grid (testing/realistic.hpp) falls back to time marching, which these tests expect.
+inline scenarios::SimulateOptions settled_run(bool quiet = false) {
+  scenarios::SimulateOptions so;
+  so.settle_time = kSettle;
+  if (quiet) so.warning = [](const std::string&) {};
+  return so;
+}
+
+// A diagnosis among `candidates` whose model settles as the recordings did.
+inline DiagnoseOptions among(const std::vector<std::string>& candidates) {
+  DiagnoseOptions o;
+  o.candidates = candidates;
+  o.settle_time_s = kSettle;
+  return o;
+}
+
+}  // namespace canalsim::diagnosis
