@@ -19,11 +19,23 @@ Series line(const std::string& name, const std::string& label, const std::vector
   return s;
 }
 
-Axis time_axis() {
-  Axis a{"t", "s"};
-  a.extend_to_ticks = false;
-  a.ticks = 8;
-  return a;
+Axis time_axis() { return data_range_axis("t", "s"); }
+
+// A figure of `c` whose panels share the time axis.
+Figure shared_time_figure(const Comparison& c) {
+  Figure f;
+  f.name = c.name;
+  f.title = c.title;
+  f.share_x = true;
+  return f;
+}
+
+// The panel of the quantity itself (levels), in its unit.
+Panel quantity_panel(const Comparison& c) {
+  Panel level;
+  level.x = time_axis();
+  level.y = Axis{c.quantity, c.unit};
+  return level;
 }
 
 Axis residual_axis(const Comparison& c) {
@@ -52,13 +64,8 @@ std::vector<Curve> residuals(const Comparison& c) {
 }
 
 Figure measured_vs_model(const Comparison& c) {
-  Figure f;
-  f.name = c.name;
-  f.title = c.title;
-  f.share_x = true;
-  Panel level;
-  level.x = time_axis();
-  level.y = Axis{c.quantity, c.unit};
+  Figure f = shared_time_figure(c);
+  Panel level = quantity_panel(c);
   level.markers = c.markers;
   level.series.push_back(line(c.measured.name, c.measured.legend(), c.t, c.measured.y));
   for (std::size_t i = 0; i < c.models.size(); ++i) {
@@ -185,13 +192,8 @@ std::optional<Figure> step_zoom(const Comparison& c, const std::vector<double>& 
   const double from_t = *change - 0.2 * span, to_t = *change + 0.8 * span;
   const auto from = static_cast<std::size_t>(std::lower_bound(c.t.begin(), c.t.end(), from_t) - c.t.begin());
   const auto to = static_cast<std::size_t>(std::upper_bound(c.t.begin(), c.t.end(), to_t) - c.t.begin());
-  Figure f;
-  f.name = c.name;
-  f.title = c.title;
-  f.share_x = true;
-  Panel level;
-  level.x = time_axis();
-  level.y = Axis{c.quantity, c.unit};
+  Figure f = shared_time_figure(c);
+  Panel level = quantity_panel(c);
   level.markers = {{*change, "command change"}};
   const std::vector<double> t = slice(c.t, from, to);
   level.series.push_back(line(c.measured.name, c.measured.legend(), t, slice(c.measured.y, from, to)));

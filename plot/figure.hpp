@@ -36,6 +36,14 @@ struct Axis {
   std::string title() const { return unit.empty() ? label : label + " [" + unit + "]"; }
 };
 
+// An axis over the data's own range (a time or a sweep), with about `ticks` intervals.
+inline Axis data_range_axis(const std::string& label, const std::string& unit, int ticks = 8) {
+  Axis a{label, unit};
+  a.extend_to_ticks = false;
+  a.ticks = ticks;
+  return a;
+}
+
 enum class Style { line, step, scatter, stems, band };
 
 struct Series {

@@ -178,8 +178,7 @@ std::vector<plot::Figure> gamma_figures(const StudyResult& r) {
     f.title = "Nrmse against γ, " + upper_name(t.spec.kind) + " (dots: best γ)";
     f.panel_height = 230.0;
     plot::Panel p;
-    p.x = plot::Axis{"γ", ""};
-    p.x.extend_to_ticks = false;
+    p.x = plot::data_range_axis("γ", "", 5);
     p.y = plot::Axis{"Nrmse", "%"};
     double best = INFINITY;
     const auto add = [&](const GammaSweep& sweep, const std::string& name, const std::string& label, std::size_t index) {
@@ -225,9 +224,7 @@ std::vector<plot::Figure> regime_figures(const StudyResult& r, const std::map<st
               format_fixed(100.0 * reg.free_fraction, 1) + " % of the samples";
     f.panel_height = 200.0;
     plot::Panel p;
-    p.x = plot::Axis{"t", "s"};
-    p.x.extend_to_ticks = false;
-    p.x.ticks = 8;
+    p.x = plot::data_range_axis("t", "s");
     p.y = plot::Axis{"level", "mm"};
     const std::vector<double> t = thin(rec.column(columns::time), points);
     const auto add = [&](const std::string& name, const std::string& label, const std::vector<double>& y, std::size_t index) {
@@ -255,9 +252,7 @@ plot::Figure spectrum_figure(const StudyResult& r) {
   f.title = "Magnitude of the Fourier transform of a unit-amplitude PRBS and of a unit step";
   f.panel_height = 260.0;
   plot::Panel p;
-  p.x = plot::Axis{"ω", "rad/s"};
-  p.x.extend_to_ticks = false;
-  p.x.ticks = 8;
+  p.x = plot::data_range_axis("ω", "rad/s");
   p.y = plot::Axis{"|F(ω)|", ""};
   p.y.scale = plot::Scale::log;
   // Three decades below the envelope's peak: the sinc's zeros would stretch the axis to 1e-16.
