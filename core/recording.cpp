@@ -15,6 +15,16 @@
 namespace canalsim {
 namespace {
 
+// A metadata line ends at the first line break: any inside a value (a scenario name with a newline)
+// would start a line the reader takes for the header, so they are written as spaces — and read as
+// spaces (a carriage return inside a line), so that a recording reads back as it was written.
+std::string one_metadata_line(std::string text) {
+  for (char& c : text) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return text;
+}
+
 // The comma-separated fields of a line, trimmed; a trailing comma ends with an empty field.
 std::vector<std::string> split_csv_line(const std::string& line) {
   std::vector<std::string> fields;
@@ -198,7 +208,8 @@ Recording parse_recording(const std::string& text, const std::string& source,
       const std::string body = trim(content.substr(1));
       const auto colon = body.find(':');
       if (colon != std::string::npos) {
-        rec.metadata.emplace_back(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
+        rec.metadata.emplace_back(one_metadata_line(trim(body.substr(0, colon))),
+                                  one_metadata_line(trim(body.substr(colon + 1))));
         metadata_lines.push_back(line_number);
       }
       continue;
@@ -248,16 +259,6 @@ Recording read_recording(const std::filesystem::path& file, const RecordingReadO
   return parse_recording(read_text_file(file, "recording"), file.string(), options);
 }
 
-// A metadata line ends at the first line break: any inside a value (a scenario name with a newline)
-// would start a line the reader takes for the header, so they are written as spaces.
-namespace {
-std::string one_metadata_line(std::string text) {
-  for (char& c : text) {
-    if (c == '\n' || c == '\r') c = ' ';
-  }
-  return text;
-}
-}  // namespace
 
 std::string format_recording(const Recording& rec) {
   std::string out;
