@@ -16,4 +16,15 @@ inline std::vector<double> white_noise(std::size_t n, std::uint64_t seed, double
   return x;
 }
 
+// x_k = φ x_{k−1} + e_k, e_k standard normal from a generator seeded with `seed`: an AR(1) series,
+// whose autocorrelation at lag m is φ^m.
+inline std::vector<double> ar1_noise(double phi, std::size_t n, unsigned seed) {
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<double> x(n);
+  double previous = 0.0;
+  for (auto& v : x) previous = v = phi * previous + noise(random);
+  return x;
+}
+
 }  // namespace canalsim::testing

@@ -9,17 +9,12 @@
 #include <cmath>
 #include <random>
 
+#include "testing/signals.hpp"
+
 namespace canalsim {
 namespace {
 
-std::vector<double> ar1(double phi, std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  std::vector<double> e(n);
-  double x = 0.0;
-  for (double& v : e) v = x = phi * x + noise(rng);
-  return e;
-}
+std::vector<double> ar1(double phi, std::size_t n, unsigned seed) { return testing::ar1_noise(phi, n, seed); }
 
 TEST(Statistics, IntegratedAutocorrelationTimeOfWhiteNoiseAndAnAr1Series) {
   EXPECT_NEAR(integrated_autocorrelation_time(ar1(0.0, 100000, 1)), 1.0, 0.05);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include "testing/signals.hpp"
+
 #include "plot/composites.hpp"
 #include "plot/palette.hpp"
 #include "testing/svg_checks.hpp"
@@ -14,14 +16,7 @@ namespace {
 using namespace canalsim::plot;
 using namespace canalsim::plot_test;
 
-std::vector<double> ar1(double phi, std::size_t n, unsigned seed) {
-  std::mt19937 random(seed);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  std::vector<double> x(n);
-  double previous = 0.0;
-  for (auto& v : x) previous = v = phi * previous + noise(random);
-  return x;
-}
+std::vector<double> ar1(double phi, std::size_t n, unsigned seed) { return canalsim::testing::ar1_noise(phi, n, seed); }
 
 TEST(Autocorrelation, WhiteNoiseStaysInsideTheBandAndTheBandIs1_96OverRootN) {
   const std::size_t n = 4000;
