@@ -27,11 +27,29 @@
 namespace canalsim::reduced::detail {
 namespace {
 
-// Σ_i g[i] r[i + s] for s = 0 … n − 1 (cross-correlation by FFT, zero-padded: no wrap-around).
+// The smallest transform length ≥ `minimum` that kissfft (Eigen's FFT backend) takes fast: a
+// product of its radices 2, 3 and 5, and a multiple of 4, which its real-input path needs. A
+// power of two alone can nearly double the length.
+std::size_t fast_transform_length(std::size_t minimum) {
+  std::size_t best = 4;
+  while (best < minimum) best <<= 1;
+  for (std::size_t fives = 1; fives < best; fives *= 5) {
+    for (std::size_t threes = fives; threes < best; threes *= 3) {
+      std::size_t length = 4 * threes;
+      while (length < minimum) length <<= 1;
+      best = std::min(best, length);
+    }
+  }
+  return best;
+}
+
+// Σ_i g[i] r[i + s] for s = 0 … max_shift (cross-correlation by FFT). Zero-padded to at least
+// n + max_shift + 1 points: a term g[i] r[i + s] with i + s past the record meets a padded zero
+// before the transform's period wraps it onto the record, so no shift asked for is aliased.
 class Correlator {
  public:
-  explicit Correlator(const std::vector<double>& r) : n_(r.size()) {
-    while (size_ < 2 * n_) size_ <<= 1;
+  Correlator(const std::vector<double>& r, std::size_t max_shift)
+      : n_(r.size()), size_(fast_transform_length(n_ + max_shift + 1)) {
     std::vector<double> padded(size_, 0.0);
     std::copy(r.begin(), r.end(), padded.begin());
     fft_.fwd(spectrum_r_, padded);
@@ -51,7 +69,7 @@ class Correlator {
 
  private:
   std::size_t n_;
-  std::size_t size_ = 1;
+  std::size_t size_;
   Eigen::FFT<double> fft_;
   std::vector<std::complex<double>> spectrum_r_, spectrum_g_;
   std::vector<double> padded_, out_;
@@ -111,17 +129,17 @@ Model Problem::delay_search() {
   const auto shift_of = [&](long shift, std::size_t j) {
     return static_cast<std::size_t>(std::lround(static_cast<double>(shift) * h0 / data_[j]->h));
   };
-  std::vector<Correlator> correlators;
-  double rr = 0.0;
-  for (std::size_t j = 0; j < data_.size(); ++j) {
-    correlators.emplace_back(residual_[j]);
-    for (double v : residual_[j]) rr += v * v * data_[j]->h;
-  }
   for (std::size_t j = 0; j < data_.size(); ++j) {
     last = std::min(last, static_cast<long>(std::floor(static_cast<double>(data_[j]->size() - 1) *
                                                        data_[j]->h / h0)));
   }
   last = std::max(last, first);
+  std::vector<Correlator> correlators;
+  double rr = 0.0;
+  for (std::size_t j = 0; j < data_.size(); ++j) {
+    correlators.emplace_back(residual_[j], std::min(shift_of(last, j), data_[j]->size()));
+    for (double v : residual_[j]) rr += v * v * data_[j]->h;
+  }
 
   Model best = base_;
   double best_sse = kInf;

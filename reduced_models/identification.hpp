@@ -129,7 +129,7 @@ struct FitResult {
   std::string message;                       // optimiser status, for reports
   // How sure the fit is (docs/reduced-models.md, "How sure a fit is"): from the least-squares
   // Jacobian of the output residuals (model − recording, every sample of every recording) by
-  // central differences, with the output offsets of the least-squares criterion as nuisance
+  // forward differences, with the output offsets of the least-squares criterion as nuisance
   // parameters, and the residuals' autocorrelation taken into account (core/statistics.hpp: the
   // batch-means sandwich covariance). For the IAE criterion it is the least-squares figure at the
   // IAE optimum (for Gaussian noise the IAE estimate scatters about sqrt(π/2) ≈ 1.25 times more).
