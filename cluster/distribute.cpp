@@ -22,7 +22,9 @@
 namespace canalsim::cluster {
 namespace {
 
+#ifdef CANALSIM_HAVE_MPI
 bool g_mpi_started = false;
+#endif
 
 // The environment mpirun gives its processes (Open MPI; PMI and PMIx of other launchers).
 int processes_launched() {
