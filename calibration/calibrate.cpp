@@ -703,6 +703,13 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     const std::vector<Parameter> parameters = select_parameters(c.calibrated, fitted);
     write_grid_converged(c, parameters, recordings, validation, replay_for(parameters, o), o.threads);
   }
+  if (o.try_model_forms && c.ok) {
+    try {
+      c.model_forms = compare_model_forms(scenario, c, recordings, validation, o);
+    } catch (const std::exception& e) {
+      c.model_forms.message = std::string("the model-form choices could not be refitted: ") + e.what();
+    }
+  }
   return c;
 }
 

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "calibration/discretisation.hpp"
+#include "calibration/model_form.hpp"
 #include "calibration/parameters.hpp"
 #include "calibration/replay.hpp"
 #include "core/progress.hpp"
@@ -74,6 +75,10 @@ struct CalibrateOptions {
   // recordings better than the estimates, calibrated holds them (and that grid). false (the library's default): the estimates on the last grid;
   // `canalsim calibrate` turns it on.
   bool write_grid_converged = false;
+  // After the calibration, each model-form choice left open added in turn and refitted from the
+  // estimates (model_form.hpp): about one calibration from the estimates per choice. Off by
+  // default; `canalsim calibrate --model-forms`.
+  bool try_model_forms = false;
   ProgressCallback progress;
   [[nodiscard]] Status validate() const;  // ok, or one line naming the field (core/status.hpp)
   static ReplayOptions default_replay();
@@ -184,6 +189,8 @@ struct Calibration {
   // grid, or the grid-converged estimates on twice (or four times) its cells when they fit better
   // (written_model.hpp); then the "after" figures are those of that model. The note says which and
   // the costs compared; empty when no choice was made.
+  // The model-form choices refitted (CalibrateOptions::try_model_forms); done = false when not.
+  ModelForms model_forms;
   bool written_grid_converged = false;
   int written_cells_factor = 1;  // the written model's cells over the last grid's
   std::string written_note;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "calibration/time_offset.hpp"
 #include "core/json.hpp"
 #include "core/format.hpp"
 
@@ -22,6 +23,29 @@ std::string lpad(std::string s, std::size_t width) {
 
 std::string value_text(double v) { return std::isfinite(v) ? format_g(v, 5) : "inf"; }
 
+nlohmann::json model_forms_json(const ModelForms& m) {
+  using nlohmann::json;
+  json j = {{"done", m.done}, {"message", m.message}, {"cost", m.cost}, {"effective_samples", m.effective_samples},
+            {"verdict", m.verdict}, {"seconds", m.seconds}, {"simulations", m.simulations}};
+  j["validation_rms_mm"] = json_number(m.validation_rms_mm);
+  j["trials"] = json::array();
+  for (const ModelFormTrial& t : m.trials) {
+    json entry = {{"name", t.name}, {"description", t.description}, {"added_parameters", t.added_parameters}, {"ok", t.ok}};
+    if (!t.ok) {
+      entry["message"] = t.message;
+    } else {
+      entry.update({{"cost", t.cost}, {"removed", t.removed}, {"bic_change", t.bic_change}, {"pays", t.pays}, {"note", t.note}});
+      entry["validation_rms_mm"] = json_number(t.validation_rms_mm);
+      entry["estimates"] = json::array();
+      for (const FormEstimate& e : t.estimates) {
+        entry["estimates"].push_back({{"name", e.name}, {"unit", e.unit}, {"value", e.value}, {"std", json_number(e.std)}});
+      }
+    }
+    j["trials"].push_back(entry);
+  }
+  return j;
+}
+
 std::string std_text(const ParameterEstimate& p) {
   if (!std::isfinite(p.std)) return "not determined";
   return format_g(p.std, 2);
@@ -36,6 +60,28 @@ std::string gate_law_lines(const Calibration& c) {
            (l.ok ? "cost per sample " + format_g(l.cost_after, 4) : "failed: " + l.message) + (l.kept ? "  (kept)" : "") + "\n";
   }
   return out;
+}
+
+std::string model_form_lines(const Calibration& c) {
+  const ModelForms& m = c.model_forms;
+  if (!m.done) return m.message.empty() ? "" : "model form: " + m.message + "\n";
+  const bool validated = !std::isnan(m.validation_rms_mm);
+  const auto validation = [&](double rms) { return validated ? "  validation " + format_g(rms, 3) + " mm" : std::string(); };
+  std::string out = "model form (each choice added and refitted from the estimates; it pays at ΔBIC < -10 on " +
+                    format_fixed(m.effective_samples, 0) + " effective samples" +
+                    (validated ? ", a validation fit no worse" : "") + " and " + format_fixed(100.0 * kTimeOffsetGain, 0) + " % of the cost removed on twice the cells):\n";
+  out += "  " + pad("as calibrated", 22) + "cost " + format_g(m.cost, 4) + validation(m.validation_rms_mm) + "\n";
+  for (const ModelFormTrial& t : m.trials) {
+    out += "  " + pad(t.name, 22);
+    if (!t.ok) {
+      out += "failed: " + t.message + "\n";
+      continue;
+    }
+    out += "cost " + pad(format_g(t.cost, 4), 8) + " removes " + lpad(format_fixed(100.0 * t.removed, 1), 5) + " %  ΔBIC " +
+           lpad(format_fixed(t.bic_change, 0), 6) + validation(t.validation_rms_mm) + (t.pays ? "  pays" : "") +
+           (t.note.empty() ? "" : "  (" + t.note + ")") + "\n";
+  }
+  return out + "  -> " + m.verdict + "\n";
 }
 
 std::string grid_lines(const Calibration& c) {
@@ -101,6 +147,7 @@ std::string text_summary(const Calibration& c) {
   if (c.grid.done) out << "grid check: " << c.grid.verdict << "\n";
   if (!c.gate_laws.empty()) out << gate_law_lines(c);
   out << grid_lines(c);
+  out << model_form_lines(c);
   if (!c.time_offset_note.empty()) out << "time offset: " << c.time_offset_note << "\n";
   if (!c.written_note.empty()) out << "model written: " << c.written_note << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
@@ -155,6 +202,7 @@ nlohmann::json to_json(const Calibration& c) {
     if (!l.ok) entry["message"] = l.message;
     j["gate_laws"].push_back(entry);
   }
+  if (c.model_forms.done || !c.model_forms.message.empty()) j["model_forms"] = model_forms_json(c.model_forms);
   j["grids"] = c.grids;
   j["grid_note"] = c.grid_note;
   j["time_offset_note"] = c.time_offset_note;

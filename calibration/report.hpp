@@ -16,6 +16,9 @@ std::string text_summary(const Calibration& c);
 nlohmann::json to_json(const Calibration& c);
 // The gate laws compared (CalibrateOptions::gate_laws), one line each, the kept one marked.
 std::string gate_law_lines(const Calibration& c);
+// The model-form choices refitted (CalibrateOptions::try_model_forms), one line each with the
+// verdict; empty when none were.
+std::string model_form_lines(const Calibration& c);
 // The grids calibrated on (CalibrateOptions::grid_refinements) and why the refinement stopped;
 // empty when none was asked for.
 std::string grid_lines(const Calibration& c);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "calibration/report.hpp"
+#include "calibration/time_offset.hpp"
 
 #include "core/html.hpp"
 #include "core/format.hpp"
@@ -72,6 +73,39 @@ std::string correlation_picture(const Calibration& c) {
   }
   s << "</svg>";
   return s.str();
+}
+
+// The model-form choices refitted (model_form.hpp) as a table, the verdict below; empty when none.
+std::string model_form_table(const ModelForms& m) {
+  if (!m.done) return m.message.empty() ? "" : "<h3>Model form</h3><p>" + html::escape(m.message) + "</p>";
+  const bool validated = !std::isnan(m.validation_rms_mm);
+  std::ostringstream h;
+  h << "<h3>Model form</h3><p>Each choice added to the model and refitted from the estimates; it pays at "
+    << "&Delta;BIC &lt; &minus;10 on " << format_fixed(m.effective_samples, 0) << " effective samples"
+    << (validated ? ", a validation fit no worse" : "") << " and " << format_fixed(100.0 * kTimeOffsetGain, 0) << " % of the cost removed on twice the cells.</p><table><tr><th>choice</th><th>adds</th>"
+    << "<th>cost per sample</th><th>removes</th><th>&Delta;BIC</th>" << (validated ? "<th>validation RMS</th>" : "")
+    << "<th>estimates, notes</th></tr><tr><td class='l'>as calibrated</td><td class='l'></td><td>" << format_g(m.cost, 4)
+    << "</td><td></td><td></td>" << (validated ? "<td>" + format_g(m.validation_rms_mm, 3) + " mm</td>" : "") << "<td></td></tr>";
+  for (const ModelFormTrial& t : m.trials) {
+    h << "<tr" << (t.pays ? " style='font-weight:bold'" : "") << "><td class='l'>" << html::escape(t.name) << "</td><td class='l'>"
+      << html::escape(t.description) << "</td>";
+    if (!t.ok) {
+      h << "<td class='l' colspan='" << (validated ? 5 : 4) << "'>failed: " << html::escape(t.message) << "</td></tr>";
+      continue;
+    }
+    h << "<td>" << format_g(t.cost, 4) << "</td><td>" << format_fixed(100.0 * t.removed, 1) << " %</td><td>"
+      << format_fixed(t.bic_change, 0) << "</td>";
+    if (validated) h << "<td>" << format_g(t.validation_rms_mm, 3) << " mm</td>";
+    std::string estimates;
+    for (const FormEstimate& e : t.estimates) {
+      estimates += (estimates.empty() ? "" : ", ") + e.name + " = " + format_g(e.value, 4) +
+                   (std::isfinite(e.std) ? " &plusmn; " + format_g(e.std, 2) : "") + " " + html::escape(e.unit);
+    }
+    if (!t.note.empty()) estimates += (estimates.empty() ? "" : "; ") + html::escape(t.note);
+    h << "<td class='l'>" << estimates << "</td></tr>";
+  }
+  h << "</table><p>" << html::escape(m.verdict) << "</p>";
+  return h.str();
 }
 
 }  // namespace
@@ -164,6 +198,7 @@ std::string html_report(const Calibration& c, const std::string& title) {
   if (c.grid.done) h << "<p><b>Grid check.</b> " << html::escape(c.grid.verdict) << ".</p>";
   if (!c.gate_laws.empty()) h << "<h3>Gate laws</h3><pre>" << html::escape(gate_law_lines(c)) << "</pre>";
   if (!c.grids.empty()) h << "<h3>Grid</h3><pre>" << html::escape(grid_lines(c)) << "</pre>";
+  h << model_form_table(c.model_forms);
   if (!c.time_offset_note.empty()) h << "<h3>Time offset</h3><p>" << html::escape(c.time_offset_note) << "</p>";
   if (!c.written_note.empty()) h << "<h3>Model written</h3><p>" << html::escape(c.written_note) << "</p>";
   h << "<h2 id='responses'>Responses and residuals</h2>";

@@ -1,5 +1,5 @@
 // `canalsim calibrate --scenario S REC... -o OUT.toml [--params P,...] [--validate REC...]
-// [--gate-laws L,...] [--json F] [--report F.html] [--plots-dir DIR] [--threads N]`: fits scenario parameters to recordings
+// [--gate-laws L,...] [--model-forms] [--json F] [--report F.html] [--plots-dir DIR] [--threads N]`: fits scenario parameters to recordings
 // (calibration/calibrate.hpp; docs/calibration.md), prints the table and writes the calibrated
 // scenario — the input file (or built-in text) with the calibrated keys replaced, each with its
 // standard deviation in a comment. Outputs are checked before the work and written atomically
@@ -41,6 +41,7 @@ struct CalibrateArguments {
   int starts = 2;
   int grid_refinements = 2;
   bool keep_grid = false;
+  bool model_forms = false;
   bool allow_long = false;
   std::string replay = "diagnosis";
   RecordingFormat format;
@@ -113,6 +114,7 @@ int run(const CalibrateArguments& args) {
   options.starts = args.starts;
   options.grid_refinements = args.grid_refinements;
   options.write_grid_converged = !args.keep_grid;
+  options.try_model_forms = args.model_forms;
   for (const auto& law : args.gate_laws) {
     options.gate_laws.push_back(law == "swamee" ? scenarios::GateLaw::swamee : scenarios::GateLaw::simple);
   }
@@ -183,6 +185,10 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
                 "or four times its cells fit the recordings better (by default those are written; docs/calibration.md)");
+  cmd->add_flag("--model-forms", args->model_forms,
+                "Then add each model-form choice left open (the head gate's zero-head regularisation, a time offset "
+                "between command and levels, the tail level) and refit from the estimates, on the scenario's grid and "
+                "on twice its cells: the cost each removes and its information criterion (docs/calibration.md)");
   cmd->add_option("--replay", args->replay,
                   "diagnosis: replay the recordings as `diagnose` does (the upstream model drives the head gate; "
                   "for a scenario diagnosed next); recorded-upstream: drive the head gate with the recorded y_up_mm "

@@ -365,7 +365,7 @@ py::list fit(const std::string& model, const py::list& recordings, bool nominal,
 py::dict calibrate(const std::string& text, const std::string& source, const py::list& recordings,
                    const py::list& validation, const std::vector<std::string>& parameters,
                    const std::vector<std::string>& channels, const std::vector<std::string>& gate_laws, int threads,
-                   int starts, int grid_refinements, bool keep_grid, const std::string& replay,
+                   int starts, int grid_refinements, bool keep_grid, bool model_forms, const std::string& replay,
                    const py::object& progress) {
   const scenarios::Scenario s = parse(text, source);
   const std::vector<Recording> fitted = recordings_from(recordings, true);
@@ -382,6 +382,7 @@ py::dict calibrate(const std::string& text, const std::string& source, const py:
   options.starts = starts;
   options.grid_refinements = grid_refinements;
   options.write_grid_converged = !keep_grid;
+  options.try_model_forms = model_forms;
   for (const auto& law : gate_laws) {
     if (law != "swamee" && law != "simple") throw InputError("gate_laws " + law + ": expected swamee or simple");
     options.gate_laws.push_back(law == "swamee" ? scenarios::GateLaw::swamee : scenarios::GateLaw::simple);

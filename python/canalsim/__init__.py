@@ -226,16 +226,18 @@ class Calibration:
 def calibrate(scenario: ScenarioLike, recordings: Recordings, *, validate: Recordings = (),
               params: Sequence[str] = (), channels: Sequence[str] = (), gate_laws: Sequence[str] = (),
               threads: int = 2, starts: int = 2, grid_refinements: int = 2, keep_grid: bool = False,
-              replay: str = "diagnosis", progress: Progress = None) -> Calibration:
+              model_forms: bool = False, replay: str = "diagnosis", progress: Progress = None) -> Calibration:
     """Fits a scenario's uncertain parameters to recordings, with ``canalsim calibrate``'s
     defaults; the keyword arguments are its flags (``params=["cd_free", "manning_n:0.008:0.02"]``,
-    ``validate=[held-out recordings]``). Raises InputError for bad input; a calibration that runs
+    ``validate=[held-out recordings]``; ``model_forms=True`` is ``--model-forms``, its result in
+    ``json["model_forms"]``). Raises InputError for bad input; a calibration that runs
     but fails returns ``ok=False`` with the reason in ``message``.
     """
     s = _scenario(scenario)
     held_out = _frames.recordings(list(validate), "validation recording") if len(validate) else []
     d = _canalsim.calibrate(s.text, s.source, _frames.recordings(recordings), held_out, list(params), list(channels),
-                            list(gate_laws), threads, starts, grid_refinements, keep_grid, replay, progress)
+                            list(gate_laws), threads, starts, grid_refinements, keep_grid, model_forms, replay,
+                            progress)
     for warning in d["warnings"]:
         import warnings
         warnings.warn(warning, RuntimeWarning, stacklevel=2)

@@ -1,0 +1,244 @@
+#include "calibration/model_form.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+#include "calibration/calibrate.hpp"
+#include "calibration/time_offset.hpp"
+#include "core/format.hpp"
+#include "scenarios/variation.hpp"
+
+namespace canalsim::calibration {
+namespace {
+
+using scenarios::Scenario;
+
+// ΔBIC below which a choice pays: "very strong" evidence (Kass & Raftery 1995, 2 ln B > 10).
+constexpr double kPaysBelow = -10.0;
+
+bool fitted(const std::vector<std::string>& specs, const std::string& name) {
+  return std::any_of(specs.begin(), specs.end(),
+                     [&](const std::string& s) { return s.substr(0, s.find(':')) == name; });
+}
+
+// A model-form choice: when it is open, and the model with it made (the scenario edited, the
+// parameters it adds appended to the specs, each starting where it changes nothing, or as near as
+// its bounds allow: the refit then never ends above the calibration it extends).
+struct FormChoice {
+  std::string name, description;
+  std::function<bool(const Scenario&, const std::vector<std::string>& specs)> open;
+  std::function<void(Scenario&, std::vector<std::string>& specs)> make;
+};
+
+// The choices, in the order they are tried.
+std::vector<FormChoice> form_choices() {
+  std::vector<FormChoice> out;
+  out.push_back({"zero_head_mm", "the head gate's submerged law linear in the head below a fitted head h0 (a gate running nearly drowned)",
+                 [](const Scenario& x, const std::vector<std::string>& specs) { return x.head_gate && !fitted(specs, "zero_head_mm"); },
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("zero_head_mm"); }});
+  out.push_back({"sensor_delay_s", "a time offset between the command and the levels",
+                 [](const Scenario&, const std::vector<std::string>& specs) { return !fitted(specs, "sensor_delay_s"); },
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("sensor_delay_s"); }});
+  out.push_back({"tail_level_mm", "the level beyond the downstream gate fitted",
+                 [](const Scenario& x, const std::vector<std::string>& specs) {
+                   return x.downstream.kind == scenarios::DownstreamKind::gate && !fitted(specs, "tail_level_mm");
+                 },
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("tail_level_mm"); }});
+  return out;
+}
+
+// RMS level residual over the validation recordings' level channels [mm]; NaN without them.
+double validation_rms(const Calibration& c) {
+  double sum = 0.0;
+  int count = 0;
+  for (const ChannelFit& f : c.fits) {
+    if (!f.validation || f.channel.rfind("y_", 0) != 0) continue;
+    sum += f.rms_after * f.rms_after;
+    ++count;
+  }
+  return count > 0 ? std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The refit's options: the calibration's, one start from the estimates, no grid check or
+// refinement, no laws compared.
+CalibrateOptions refit_options(const Calibration& c, const CalibrateOptions& o, const std::vector<std::string>& specs) {
+  CalibrateOptions one = o;
+  one.parameters = specs;
+  one.starts = 1;
+  // The channels the calibration compared, and only those: a choice that gives the model a
+  // channel it lacked (the gate's position behind a finite-speed actuator) would otherwise be
+  // scored on other residuals.
+  one.replay.channels.clear();
+  for (const ChannelFit& f : c.fits) {
+    if (std::find(one.replay.channels.begin(), one.replay.channels.end(), f.channel) == one.replay.channels.end()) {
+      one.replay.channels.push_back(f.channel);
+    }
+  }
+  one.grid_refinements = 0;
+  one.grid_check = false;
+  one.write_grid_converged = false;
+  one.gate_laws.clear();
+  one.try_model_forms = false;
+  return one;
+}
+
+// The trial of one choice against the refitted calibration `base`.
+ModelFormTrial score(const FormChoice& choice, const Calibration& refit, const Calibration& base,
+                     const std::vector<std::string>& base_specs, double effective_samples) {
+  ModelFormTrial t;
+  t.name = choice.name;
+  t.description = choice.description;
+  t.ok = refit.ok;
+  t.message = refit.message;
+  t.added_parameters = static_cast<int>(refit.parameters.size()) - static_cast<int>(base_specs.size());
+  if (!t.ok) return t;
+  t.cost = refit.cost_after;
+  t.removed = 1.0 - refit.cost_after / base.cost_after;
+  t.bic_change = effective_samples * std::log(refit.cost_after / base.cost_after) +
+                 t.added_parameters * std::log(effective_samples);
+  t.validation_rms_mm = validation_rms(refit);
+  const double base_validation = validation_rms(base);
+  const bool validation_not_worse = std::isnan(base_validation) || t.validation_rms_mm <= base_validation;
+  t.pays = t.bic_change < kPaysBelow && validation_not_worse;
+  for (const ParameterEstimate& p : refit.parameters) {
+    if (!fitted(base_specs, p.name)) t.estimates.push_back({p.name, p.unit, p.value, p.std});
+  }
+  return t;
+}
+
+// The scenario as given, on its own grid, with the calibration's estimates on the last grid (and
+// the gate law kept, when laws were compared): the choices are compared there, where a refit
+// costs what the first calibration did, not 4^k times that on a grid refined k times (or on the
+// finer grid of written grid-converged estimates).
+Scenario estimates_on_given_grid(const Scenario& given, const Calibration& c, const std::vector<std::string>& specs) {
+  Scenario s = given;
+  for (const GateLawFit& l : c.gate_laws) {
+    if (l.kept) s = scenarios::with_gate_law(s, l.law);
+  }
+  const std::vector<Parameter> parameters = select_parameters(s, specs);
+  for (std::size_t j = 0; j < parameters.size() && j < c.parameters.size(); ++j) parameters[j].set(s, c.parameters[j].value);
+  return s;
+}
+
+std::string verdict_of(const ModelForms& m) {
+  const auto best = std::find_if(m.trials.begin(), m.trials.end(), [](const ModelFormTrial& t) { return t.pays; });
+  if (best == m.trials.end()) {
+    return "no model-form choice tried pays (none lowers ΔBIC below " + format_g(kPaysBelow) +
+           " with a validation fit no worse and " + format_fixed(100.0 * kTimeOffsetGain, 0) +
+           " % of the cost removed on twice the cells): among these the model's form does not limit the fit";
+  }
+  std::string line = best->name + " pays most: it removes " + format_fixed(100.0 * best->removed, 1) +
+                     " % of the cost (ΔBIC " + format_fixed(best->bic_change, 0) + ")";
+  if (!std::isnan(best->validation_rms_mm)) {
+    line += ", validation RMS " + format_g(m.validation_rms_mm, 3) + " -> " + format_g(best->validation_rms_mm, 3) + " mm";
+  }
+  for (const FormEstimate& e : best->estimates) {
+    line += "; " + e.name + " = " + format_g(e.value, 4) + (std::isfinite(e.std) ? " ± " + format_g(e.std, 2) : "") + " " + e.unit;
+  }
+  return line;
+}
+
+}  // namespace
+
+ModelForms compare_model_forms(const Scenario& scenario, const Calibration& c, const std::vector<Recording>& recordings,
+                               const std::vector<Recording>& validation, const CalibrateOptions& o) {
+  const auto started = std::chrono::steady_clock::now();
+  ModelForms m;
+  std::vector<std::string> specs;
+  for (const ParameterEstimate& p : c.parameters) specs.push_back(p.name + ":" + format_g(p.low, 17) + ":" + format_g(p.high, 17));
+  const Scenario given = estimates_on_given_grid(scenario, c, specs);
+  std::vector<FormChoice> choices = form_choices();
+  choices.erase(std::remove_if(choices.begin(), choices.end(), [&](const FormChoice& f) { return !f.open(given, specs); }),
+                choices.end());
+  std::size_t stage = 0;
+  // The calibration and each choice on one and on twice the cells, and on top of the best.
+  const std::size_t stages = 3 * choices.size() + 2;
+  const auto refit = [&](const Scenario& s, const std::vector<std::string>& with, const std::string& what) {
+    CalibrateOptions one = refit_options(c, o, with);
+    if (o.progress) {
+      const std::size_t k = std::min(stage, stages - 1);
+      one.progress = [&o, k, stages, what](const ProgressReport& p) {
+        o.progress({(static_cast<double>(k) + std::max(p.fraction, 0.0)) / static_cast<double>(stages),
+                    "model form, " + what + ": " + p.message});
+      };
+    }
+    ++stage;
+    Calibration result = calibrate(s, recordings, validation, one);
+    m.simulations += result.simulations;
+    return result;
+  };
+
+  // The calibration as it stands, on the same terms as the choices.
+  const Calibration base = refit(given, specs, "as calibrated");
+  if (!base.ok) {
+    m.message = "the calibration refitted as it stands failed: " + base.message;
+    return m;
+  }
+  m.cost = base.cost_after;
+  m.validation_rms_mm = validation_rms(base);
+  m.effective_samples = static_cast<double>(base.samples) / std::max(1.0, base.inflation);
+
+  // Each choice alone.
+  std::vector<Scenario> made(choices.size(), given);
+  std::vector<std::vector<std::string>> made_specs(choices.size(), specs);
+  std::vector<Calibration> alone;
+  for (std::size_t k = 0; k < choices.size(); ++k) {
+    choices[k].make(made[k], made_specs[k]);
+    alone.push_back(refit(made[k], made_specs[k], choices[k].name));
+    m.trials.push_back(score(choices[k], alone.back(), base, specs, m.effective_samples));
+  }
+
+  // On the scenario's grid a choice can pay by standing in for the discretisation (a time offset
+  // for the scheme's phase error): each choice that pays is refitted on twice the cells too, and
+  // keeps "pays" only if it still pays there.
+  if (std::any_of(m.trials.begin(), m.trials.end(), [](const ModelFormTrial& t) { return t.pays; })) {
+    const Calibration finer_base = refit(scenarios::with_cells_multiplied(base.calibrated, 2), specs, "as calibrated, twice the cells");
+    for (std::size_t k = 0; k < choices.size() && finer_base.ok; ++k) {
+      if (!m.trials[k].pays) continue;
+      const std::string finer_cells = std::to_string(2 * given.pools.front().cells) + " cells";
+      const ModelFormTrial finer =
+          score(choices[k], refit(scenarios::with_cells_multiplied(alone[k].calibrated, 2), made_specs[k], choices[k].name + ", twice the cells"),
+                finer_base, specs, m.effective_samples);
+      // Material as the calibration's own time-offset scan asks of a delay (time_offset.hpp):
+      // a share of the cost, here on the finer grid, where the discretisation's is smaller.
+      m.trials[k].pays = finer.pays && finer.removed >= kTimeOffsetGain;
+      m.trials[k].note = (m.trials[k].pays ? "pays on " + finer_cells + " too"
+                          : finer.pays      ? "removes less than " + format_fixed(100.0 * kTimeOffsetGain, 0) + " % on " + finer_cells
+                                            : "does not pay on " + finer_cells + ": it stood in for the discretisation") +
+                         " (removes " + format_fixed(100.0 * finer.removed, 1) + " %, ΔBIC " + format_fixed(finer.bic_change, 0) + " there)";
+    }
+  }
+  // A choice can also pay alone by standing in for a better one (a regularised gate law for a
+  // tail level it does not know): each other choice that still pays is refitted on top of the
+  // one that pays most, and keeps "pays" only if it pays there too.
+  const auto best = std::min_element(m.trials.begin(), m.trials.end(), [](const ModelFormTrial& a, const ModelFormTrial& b) {
+    return a.pays && (!b.pays || a.bic_change < b.bic_change);
+  });
+  if (best != m.trials.end() && best->pays) {
+    const std::size_t b = static_cast<std::size_t>(best - m.trials.begin());
+    for (std::size_t k = 0; k < choices.size(); ++k) {
+      if (k == b || !m.trials[k].pays) continue;
+      Scenario both = alone[b].calibrated;  // from the best choice's estimates
+      std::vector<std::string> both_specs = made_specs[b];
+      choices[k].make(both, both_specs);
+      const ModelFormTrial on_best = score(choices[k], refit(both, both_specs, choices[k].name + " with " + choices[b].name),
+                                           alone[b], made_specs[b], m.effective_samples);
+      m.trials[k].pays = on_best.pays;
+      m.trials[k].note += std::string("; ") + (on_best.pays ? "pays beyond " : "not beyond ") + choices[b].name +
+                          " (ΔBIC " + format_fixed(on_best.bic_change, 0) + " on top of it)";
+    }
+  }
+  std::stable_sort(m.trials.begin(), m.trials.end(), [](const ModelFormTrial& a, const ModelFormTrial& b) {
+    if (a.ok != b.ok) return a.ok;
+    return a.ok && a.bic_change < b.bic_change;
+  });
+  m.done = true;
+  m.verdict = verdict_of(m);
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return m;
+}
+
+}  // namespace canalsim::calibration
