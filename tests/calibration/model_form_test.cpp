@@ -58,7 +58,9 @@ const ModelFormTrial& trial(const ModelForms& m, const std::string& name) {
 // No choice but `right` pays (a time offset is not tried where the calibration fitted one).
 void expect_only_paying(const ModelForms& m, const std::string& right) {
   for (const ModelFormTrial& t : m.trials) {
-    if (t.name != right) EXPECT_FALSE(t.pays) << t.name << ": " << t.note;
+    if (t.name != right) {
+      EXPECT_FALSE(t.pays) << t.name << ": " << t.note;
+    }
   }
 }
 
