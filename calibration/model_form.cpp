@@ -68,9 +68,8 @@ CalibrateOptions refit_options(const Calibration& c, const CalibrateOptions& o, 
   CalibrateOptions one = o;
   one.parameters = specs;
   one.starts = 1;
-  // The channels the calibration compared, and only those: a choice that gives the model a
-  // channel it lacked (the gate's position behind a finite-speed actuator) would otherwise be
-  // scored on other residuals.
+  // The channels the calibration compared, and only those: a choice whose model produces a
+  // channel the calibration's lacked would otherwise be scored on other residuals.
   one.replay.channels.clear();
   for (const ChannelFit& f : c.fits) {
     if (std::find(one.replay.channels.begin(), one.replay.channels.end(), f.channel) == one.replay.channels.end()) {
