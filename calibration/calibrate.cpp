@@ -703,6 +703,7 @@ Calibration calibrate(const Scenario& scenario, const std::vector<Recording>& re
     const std::vector<Parameter> parameters = select_parameters(c.calibrated, fitted);
     write_grid_converged(c, parameters, recordings, validation, replay_for(parameters, o), o.threads);
   }
+  if (c.ok) c.breakdown = residual_breakdown(c.series);
   if (o.try_model_forms && c.ok) {
     try {
       c.model_forms = compare_model_forms(scenario, c, recordings, validation, o);

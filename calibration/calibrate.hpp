@@ -32,6 +32,7 @@
 #include "calibration/model_form.hpp"
 #include "calibration/parameters.hpp"
 #include "calibration/replay.hpp"
+#include "calibration/residual_breakdown.hpp"
 #include "core/progress.hpp"
 #include "core/recording.hpp"
 #include "core/status.hpp"
@@ -189,6 +190,9 @@ struct Calibration {
   // grid, or the grid-converged estimates on twice (or four times) its cells when they fit better
   // (written_model.hpp); then the "after" figures are those of that model. The note says which and
   // the costs compared; empty when no choice was made.
+  // Where the level residual of the model written lives (residual_breakdown.hpp), without the
+  // choices' shares: those are in model_forms.breakdown.
+  ResidualBreakdown breakdown;
   // The model-form choices refitted (CalibrateOptions::try_model_forms); done = false when not.
   ModelForms model_forms;
   bool written_grid_converged = false;

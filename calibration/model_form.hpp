@@ -2,9 +2,11 @@
 // calibration leave open is added in turn and the calibration refitted from the estimates, so the
 // part of the residual it removes is measured, not guessed.
 //
-//   1. The choices that apply: a parameter of the model's form not fitted yet — the head gate's
-//      submerged law regularised near zero head, a time offset between the command and the
-//      levels, the level beyond the downstream gate. (The gate law itself is compared by
+//   1. The choices that apply: a parameter of the model's form not fitted yet — a head-gate
+//      discharge coefficient that varies with the opening (a power law, the simplest gate
+//      rating; with the submerged multiplier's blend it varies with opening and submergence), the
+//      head gate's submerged law regularised near zero head, a time offset between the command
+//      and the levels, the level beyond the downstream gate. (The gate law itself is compared by
 //      CalibrateOptions::gate_laws, each law calibrated from the scenario's values: the laws'
 //      coefficients mean different things, so one law's estimates are no start for the other.
 //      A finite actuator speed, paper eq. 16, is not among them: an ideal gate lies outside its
@@ -25,13 +27,15 @@
 //      (the share the calibration's time-offset scan asks of a delay, time_offset.hpp): one that
 //      paid by standing in for the discretisation (a time offset of a tenth of a sample for the
 //      scheme's phase error) does not.
-//   5. Each other choice that still pays is refitted on top of the one that pays most: one that
-//      stood in for it (a regularised gate law for a tail level) no longer pays there.
+//   5. Each other choice that still pays is refitted on top of the one that pays most, and keeps
+//      "pays" only if it pays there and removes 15 % of what is left: one that stood in for it
+//      (a regularised gate law, or a rating, for a tail level) does not.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "calibration/residual_breakdown.hpp"
 #include "core/recording.hpp"
 #include "scenarios/scenario.hpp"
 
@@ -48,7 +52,7 @@ struct FormEstimate {
 
 // One model-form choice, refitted.
 struct ModelFormTrial {
-  std::string name;         // zero_head_mm, sensor_delay_s, tail_level_mm
+  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, tail_level_mm
   std::string description;  // what the choice adds to the model, in words
   int added_parameters = 0;
   bool ok = false;
@@ -75,6 +79,8 @@ struct ModelForms {
   double seconds = 0.0;
   int simulations = 0;
   std::string verdict;                  // one line: the choice that pays most, or that none does
+  // Where the reference's level residual lives and the share each choice's refit removes there.
+  ResidualBreakdown breakdown;
 };
 
 // The comparison for the calibration `c` of `scenario` to `recordings` (with `validation` held

@@ -58,6 +58,16 @@ void add_head_gate(const Scenario& s, std::vector<Parameter>& out) {
                      0.0, 20.0, Transform::linear, 0.05, [](const Scenario& x) { return x.head_gate->zero_head_m / kMm; },
                      [](Scenario& x, double v) { x.head_gate->zero_head_m = v * kMm; }));
   out.back().low_is_published = true;
+  out.push_back(make("cd_opening_exponent", "-", "head_gate.cd_opening_exponent",
+                     "exponent β of the head gate's discharge coefficient in the opening, Cd ∝ (a / a_ref)^β "
+                     "(gates/sluice_gate.hpp)",
+                     -1.0, 1.0, Transform::linear, 0.01, [](const Scenario& x) { return x.head_gate->cd_opening_exponent; },
+                     [](Scenario& x, double v) { x.head_gate->cd_opening_exponent = v; }));
+  out.push_back(make("cd_opening_curvature", "-", "head_gate.cd_opening_curvature",
+                     "curvature γ of the head gate's discharge coefficient in log-log, exp(γ ln²(a / a_ref)) "
+                     "(gates/sluice_gate.hpp)",
+                     -1.0, 1.0, Transform::linear, 0.01, [](const Scenario& x) { return x.head_gate->cd_opening_curvature; },
+                     [](Scenario& x, double v) { x.head_gate->cd_opening_curvature = v; }));
   out.push_back(make("actuator_speed_mm_s", "mm/s", "head_gate.actuator_speed_m_s",
                      "head gate actuator speed (paper eq. 16); the scenario's 0 (ideal) is outside the bounds", 0.5,
                      1000.0, Transform::log, 0.02, [](const Scenario& x) { return x.head_gate->actuator_speed_m_s / kMm; },

@@ -6,6 +6,9 @@
 //   name                    unit      key                                        search
 //   cd_free                 -         head_gate.discharge_coefficient             log
 //   cd_submerged            -         head_gate.submerged_discharge_coefficient   log
+//   zero_head_mm            mm        head_gate.zero_head_m                       linear
+//   cd_opening_exponent     -         head_gate.cd_opening_exponent               linear
+//   cd_opening_curvature    -         head_gate.cd_opening_curvature              linear
 //   manning_n (.i)          s m^-1/3  pools[i].manning_n                          log
 //   bed_slope (.i)          m/m       pools[i].bed_slope                          linear
 //   downstream_opening_mm   mm        downstream.gate.opening_m                   linear

@@ -23,11 +23,26 @@ std::string lpad(std::string s, std::size_t width) {
 
 std::string value_text(double v) { return std::isfinite(v) ? format_g(v, 5) : "inf"; }
 
+nlohmann::json breakdown_json(const ResidualBreakdown& b) {
+  using nlohmann::json;
+  json j = {{"choices", b.choices}, {"groups", json::array()}};
+  for (const BreakdownGroup& g : b.groups) {
+    json entry = {{"axis", g.axis}, {"name", g.name}, {"samples", g.samples}, {"rms_mm", g.rms_mm}, {"mean_mm", g.mean_mm}};
+    if (!b.choices.empty()) {
+      entry["removed"] = json::object();
+      for (std::size_t k = 0; k < b.choices.size() && k < g.removed.size(); ++k) entry["removed"][b.choices[k]] = json_number(g.removed[k]);
+    }
+    j["groups"].push_back(entry);
+  }
+  return j;
+}
+
 nlohmann::json model_forms_json(const ModelForms& m) {
   using nlohmann::json;
   json j = {{"done", m.done}, {"message", m.message}, {"cost", m.cost}, {"effective_samples", m.effective_samples},
             {"verdict", m.verdict}, {"seconds", m.seconds}, {"simulations", m.simulations}};
   j["validation_rms_mm"] = json_number(m.validation_rms_mm);
+  j["breakdown"] = breakdown_json(m.breakdown);
   j["trials"] = json::array();
   for (const ModelFormTrial& t : m.trials) {
     json entry = {{"name", t.name}, {"description", t.description}, {"added_parameters", t.added_parameters}, {"ok", t.ok}};
@@ -82,6 +97,35 @@ std::string model_form_lines(const Calibration& c) {
            (t.note.empty() ? "" : "  (" + t.note + ")") + "\n";
   }
   return out + "  -> " + m.verdict + "\n";
+}
+
+std::string breakdown_lines(const Calibration& c) {
+  const bool shares = c.model_forms.done && !c.model_forms.breakdown.choices.empty();
+  const ResidualBreakdown& b = shares ? c.model_forms.breakdown : c.breakdown;
+  if (b.groups.empty()) return "";
+  std::string out = shares ? "where the residual lives (the reference refitted for the model form; level channels, recorded − model;\n"
+                             " each choice's column: the share of the group's squared residual its refit removes):\n"
+                           : "where the residual lives (level channels, recorded − model):\n";
+  std::size_t gw = 14;
+  for (const BreakdownGroup& g : b.groups) gw = std::max(gw, g.name.size() + 2);
+  out += "  " + pad("axis", 17) + pad("group", gw) + lpad("samples", 8) + lpad("RMS mm", 9) + lpad("mean mm", 9);
+  std::vector<std::size_t> widths;
+  for (const std::string& name : b.choices) {
+    widths.push_back(std::max<std::size_t>(name.size(), 7) + 2);
+    out += lpad(name, widths.back());
+  }
+  out += "\n";
+  std::string axis;
+  for (const BreakdownGroup& g : b.groups) {
+    out += "  " + pad(g.axis == axis ? "" : g.axis, 17) + pad(g.name, gw) + lpad(std::to_string(g.samples), 8) +
+           lpad(format_fixed(g.rms_mm, 3), 9) + lpad(format_fixed(g.mean_mm, 3), 9);
+    axis = g.axis;
+    for (std::size_t k = 0; k < widths.size() && k < g.removed.size(); ++k) {
+      out += lpad(std::isfinite(g.removed[k]) ? format_fixed(100.0 * g.removed[k], 0) + " %" : "-", widths[k]);
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 std::string grid_lines(const Calibration& c) {
@@ -148,6 +192,7 @@ std::string text_summary(const Calibration& c) {
   if (!c.gate_laws.empty()) out << gate_law_lines(c);
   out << grid_lines(c);
   out << model_form_lines(c);
+  out << breakdown_lines(c);
   if (!c.time_offset_note.empty()) out << "time offset: " << c.time_offset_note << "\n";
   if (!c.written_note.empty()) out << "model written: " << c.written_note << "\n";
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
@@ -202,6 +247,7 @@ nlohmann::json to_json(const Calibration& c) {
     if (!l.ok) entry["message"] = l.message;
     j["gate_laws"].push_back(entry);
   }
+  j["residual_breakdown"] = breakdown_json(c.breakdown);
   if (c.model_forms.done || !c.model_forms.message.empty()) j["model_forms"] = model_forms_json(c.model_forms);
   j["grids"] = c.grids;
   j["grid_note"] = c.grid_note;

@@ -19,6 +19,9 @@ std::string gate_law_lines(const Calibration& c);
 // The model-form choices refitted (CalibrateOptions::try_model_forms), one line each with the
 // verdict; empty when none were.
 std::string model_form_lines(const Calibration& c);
+// Where the level residual lives (residual_breakdown.hpp), a line per group: with the model-form
+// choices' shares when they were refitted, else the calibration's own; empty without level channels.
+std::string breakdown_lines(const Calibration& c);
 // The grids calibrated on (CalibrateOptions::grid_refinements) and why the refinement stopped;
 // empty when none was asked for.
 std::string grid_lines(const Calibration& c);

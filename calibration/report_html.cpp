@@ -108,6 +108,44 @@ std::string model_form_table(const ModelForms& m) {
   return h.str();
 }
 
+// Where the residual lives (residual_breakdown.hpp) as a table; each choice's share shaded green
+// by how much it removes (red where its refit fits the group worse), so where a choice acts shows
+// at a glance.
+std::string breakdown_table(const Calibration& c) {
+  const bool shares = c.model_forms.done && !c.model_forms.breakdown.choices.empty();
+  const ResidualBreakdown& b = shares ? c.model_forms.breakdown : c.breakdown;
+  if (b.groups.empty()) return "";
+  std::ostringstream h;
+  h << "<h3>Where the residual lives</h3><p>The level residual (recorded &minus; model) by operating point, by each "
+    << "recording's own thirds of the level, by time after a command switch and by band (moving averages over 20 s "
+    << "and 2 s); a mean comparable to the RMS is a static error."
+    << (shares ? " Each choice's column: the share of the group's squared residual its refit removes "
+                 "(the reference refitted for the model form)." : "")
+    << "</p><table><tr><th>axis</th><th>group</th><th>samples</th><th>RMS</th><th>mean</th>";
+  for (const std::string& name : b.choices) h << "<th>" << html::escape(name) << "</th>";
+  h << "</tr>";
+  std::string axis;
+  for (const BreakdownGroup& g : b.groups) {
+    h << "<tr><td class='l'>" << (g.axis == axis ? "" : html::escape(g.axis)) << "</td><td class='l'>" << html::escape(g.name)
+      << "</td><td>" << g.samples << "</td><td>" << format_fixed(g.rms_mm, 3) << " mm</td><td>" << format_fixed(g.mean_mm, 3)
+      << " mm</td>";
+    axis = g.axis;
+    for (const double share : g.removed) {
+      if (!std::isfinite(share)) {
+        h << "<td>-</td>";
+        continue;
+      }
+      const double strength = std::min(1.0, std::abs(share));
+      const std::string colour = share >= 0.0 ? "40,160,70" : "200,60,50";
+      h << "<td style='background:rgba(" << colour << "," << format_fixed(0.6 * strength, 2) << ")'>"
+        << format_fixed(100.0 * share, 0) << " %</td>";
+    }
+    h << "</tr>";
+  }
+  h << "</table>";
+  return h.str();
+}
+
 }  // namespace
 
 std::vector<plot::Figure> report_figures(const Calibration& c) {
@@ -199,6 +237,7 @@ std::string html_report(const Calibration& c, const std::string& title) {
   if (!c.gate_laws.empty()) h << "<h3>Gate laws</h3><pre>" << html::escape(gate_law_lines(c)) << "</pre>";
   if (!c.grids.empty()) h << "<h3>Grid</h3><pre>" << html::escape(grid_lines(c)) << "</pre>";
   h << model_form_table(c.model_forms);
+  h << breakdown_table(c);
   if (!c.time_offset_note.empty()) h << "<h3>Time offset</h3><p>" << html::escape(c.time_offset_note) << "</p>";
   if (!c.written_note.empty()) h << "<h3>Model written</h3><p>" << html::escape(c.written_note) << "</p>";
   h << "<h2 id='responses'>Responses and residuals</h2>";

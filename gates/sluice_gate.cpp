@@ -129,6 +129,12 @@ Status SluiceGateOptions::validate() const {
                leakage_opening, "a value in [0, 1] m")
       .require(std::isfinite(zero_head) && zero_head >= 0.0 && zero_head <= 1.0, "zero_head", zero_head,
                "a value in [0, 1] m")
+      .require(std::isfinite(opening_exponent) && std::abs(opening_exponent) <= 2.0, "opening_exponent",
+               opening_exponent, "a value in [-2, 2]")
+      .require(std::isfinite(opening_curvature) && std::abs(opening_curvature) <= 2.0, "opening_curvature",
+               opening_curvature, "a value in [-2, 2]")
+      .require(in_half_open(reference_opening, 0.0, 100.0), "reference_opening", reference_opening,
+               "a value in (0, 100] m")
       .require(in_half_open(gravity, 0.0, 100.0), "gravity", gravity, "a value in (0, 100] m/s^2")
       .status();
 }
@@ -316,6 +322,24 @@ SluiceGate::Partials SluiceGate::submerged_swamee(double y1, double y3, const Se
   return out;
 }
 
+// The law's discharge times the opening rating c(a) = exp(β x + γ x²), x = ln(a / a_ref)
+// (SluiceGateOptions::opening_exponent), at the opening the law sees; dc/da = c (β + 2 γ x) / a
+// inside the clamp of x, 0 beyond it.
+SluiceGate::Partials SluiceGate::rated(const Partials& law, const SeenOpening& seen) const {
+  constexpr double kLogOpeningClamp = 4.0;
+  const double beta = options_.opening_exponent, gamma = options_.opening_curvature;
+  const double raw = std::log(seen.a / options_.reference_opening);
+  const double x = std::clamp(raw, -kLogOpeningClamp, kLogOpeningClamp);
+  const double c = std::exp(beta * x + gamma * x * x);
+  const double dc_da = raw == x ? c * (beta + 2.0 * gamma * x) / seen.a : 0.0;  // per unit seen opening
+  Partials out;
+  out.q = c * law.q;
+  out.d_y1 = c * law.d_y1 + law.q * dc_da * seen.d_y1;
+  out.d_y3 = c * law.d_y3;
+  out.d_a = c * law.d_a + law.q * dc_da * seen.d_a;
+  return out;
+}
+
 // Flow from side 1 (the higher one, y1 >= y3) to side 3; partials in (y1, y3, raw opening a):
 // the opening the law sees, the free discharge, the border of the flow law, then free flow
 // (condition 8) or the submerged law (condition 10).
@@ -327,13 +351,15 @@ SluiceGate::Partials SluiceGate::forward(double y1, double y3, double a, GateReg
   const SeenOpening seen = seen_opening(y1, a, geometric);
   const Partials free = free_discharge(y1, seen, memo);
   const Border border = flow_border(y3, seen.a, memo);
+  const bool rating = options_.opening_exponent != 0.0 || options_.opening_curvature != 0.0;
+  const auto with_rating = [&](const Partials& law) { return rating ? rated(law, seen) : law; };
   if (y1 > border.y_lc) {  // condition (8): free flow
     regime = seen.out_of_water ? GateRegime::out_of_water : GateRegime::free;
-    return free;
+    return with_rating(free);
   }
   regime = seen.out_of_water ? GateRegime::out_of_water : GateRegime::submerged;  // condition (10)
-  if (options_.law == GateLaw::simple) return submerged_simple(y1, y3, seen);
-  return submerged_swamee(y1, y3, seen, free, border);
+  if (options_.law == GateLaw::simple) return with_rating(submerged_simple(y1, y3, seen));
+  return with_rating(submerged_swamee(y1, y3, seen, free, border));
 }
 
 GateFlow SluiceGate::evaluate(double y1, double y3, double a) const {

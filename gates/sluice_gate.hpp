@@ -112,6 +112,19 @@ struct SluiceGateOptions {
   // (calibration/parameters.cpp) to a gate that runs nearly drowned, like the lab's head gate at
   // op3/op4 (head ~1 mm).
   double zero_head = 0.0;
+  // A discharge coefficient that varies smoothly with the opening, the shape real gate ratings
+  // take (Cd of a sluice gate rises or falls by several per cent over its range of openings, and
+  // the published laws' contraction term does not follow every gate). The law's discharge, free
+  // and submerged, is multiplied by
+  //   c(a) = exp(β x + γ x²),  x = ln(a / a_ref) clamped to [-4, 4],
+  // a the opening the law sees: a power law of the opening (Cd ∝ a^β) when γ = 0, curved in
+  // log-log otherwise, 1 at a_ref. β = γ = 0 (the default) is the law as published. With the
+  // submerged multiplier's blend in the submergence factor F (above), the coefficient varies
+  // smoothly with opening and submergence. Out of the water the law keeps c at the frozen
+  // opening, so the flow is continuous in the opening but is c(r_c y1) times critical flow.
+  double opening_exponent = 0.0;   // β, range [-2, 2]
+  double opening_curvature = 0.0;  // γ, range [-2, 2]
+  double reference_opening = 0.025;  // a_ref [m], range (0, 100]
   double gravity = standard_gravity;  // m/s^2, range (0, 100]
 
   // Ok, or one line naming the field and its allowed range (core/status.hpp).
@@ -191,6 +204,7 @@ class SluiceGate {
   Partials submerged_simple(double y1, double y3, const SeenOpening& seen) const;
   Partials submerged_swamee(double y1, double y3, const SeenOpening& seen, const Partials& free,
                             const Border& border) const;
+  Partials rated(const Partials& law, const SeenOpening& seen) const;
 
   SluiceGateOptions options_;
   double cap_ratio_ = 1.0;

@@ -63,6 +63,9 @@ gates::GateGeometry gate_geometry(const GateSpec& g) {
   geometry.law.submerged_discharge_coefficient_multiplier = g.submerged_coefficient();
   geometry.law.leakage_opening = g.leakage_m;
   geometry.law.zero_head = g.zero_head_m;
+  geometry.law.opening_exponent = g.cd_opening_exponent;
+  geometry.law.opening_curvature = g.cd_opening_curvature;
+  geometry.law.reference_opening = g.cd_reference_opening();
   return geometry;
 }
 

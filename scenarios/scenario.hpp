@@ -74,6 +74,13 @@ struct GateSpec {
   // Head below which the submerged law turns linear in the head (gates/sluice_gate.hpp
   // SluiceGateOptions::zero_head); 0 = the law as published.
   double zero_head_m = 0.0;
+  // A discharge coefficient varying smoothly with the opening (gates/sluice_gate.hpp
+  // SluiceGateOptions::opening_exponent): the law times exp(β x + γ x²), x = ln(a / a_ref).
+  // 0 and 0 = the law as published; a_ref 0 = half the gate's max_opening_m.
+  double cd_opening_exponent = 0.0;   // β
+  double cd_opening_curvature = 0.0;  // γ
+  double cd_reference_opening_m = 0.0;
+  double cd_reference_opening() const { return cd_reference_opening_m > 0.0 ? cd_reference_opening_m : 0.5 * max_opening_m; }
   double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
   bool controlled = false;          // driven by the experiment's input signal
   // opening_m = "auto": opening_m is computed (scenarios/design.hpp) so that the gate passes the

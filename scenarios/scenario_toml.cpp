@@ -48,6 +48,10 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
   }
   g.leakage_m = t.number("leakage_m", g.leakage_m, {0.0, 1.0}, "m");
   g.zero_head_m = t.number("zero_head_m", g.zero_head_m, {0.0, 1.0}, "m (0 = the submerged law as published)");
+  g.cd_opening_exponent = t.number("cd_opening_exponent", g.cd_opening_exponent, {-2.0, 2.0}, "(0 = the law as published)");
+  g.cd_opening_curvature = t.number("cd_opening_curvature", g.cd_opening_curvature, {-2.0, 2.0}, "(0 = the law as published)");
+  g.cd_reference_opening_m = t.number("cd_reference_opening_m", g.cd_reference_opening_m, {0.0, 100.0},
+                                      "m (0 = half of max_opening_m)");
   g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
   g.controlled = t.boolean("controlled", g.controlled);
   t.reject_unknown_keys();

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -123,6 +124,45 @@ TEST(ModelForms, AHeadGateRegularisedNearZeroHeadIsTheChoiceThatPays) {
   ASSERT_EQ(h0.estimates.size(), 1u);
   EXPECT_GT(h0.estimates.front().value, 1.0);  // mm: away from the published law's 0
   expect_only_paying(m, "zero_head_mm");
+}
+
+// A gate rating of another form than the choice's: the truth's discharge coefficient curves in
+// log-log over the openings (β = 0.08, γ = −0.05 about 40 mm, 0.86 of its value at 10 mm, 1.02
+// at 50 mm), the choice fits a straight power law about the middle of the commanded openings.
+// Between op1's 10–20 mm and op4's 40–50 mm the free and submerged coefficients take the level;
+// the rating is what changes the gain within each operating point.
+TEST(ModelForms, AGateRatingVaryingWithTheOpeningIsTheChoiceThatPays) {
+  Scenario truth = model();
+  truth.head_gate->cd_opening_exponent = 0.08;
+  truth.head_gate->cd_opening_curvature = -0.05;
+  truth.head_gate->cd_reference_opening_m = 0.040;
+  const Calibration c = calibrated_with_forms(truth, {"op1", "op2", "op3", "op4"});
+  ASSERT_TRUE(c.ok) << c.message;
+  const ModelForms& m = c.model_forms;
+  ASSERT_TRUE(m.done) << m.message;
+  ASSERT_FALSE(m.trials.empty());
+  std::cout << model_form_lines(c);
+  EXPECT_EQ(m.trials.front().name, "cd_opening_exponent") << model_form_lines(c);
+  const ModelFormTrial& rating = trial(m, "cd_opening_exponent");
+  EXPECT_TRUE(rating.pays) << rating.note;
+  EXPECT_LT(rating.validation_rms_mm, m.validation_rms_mm);
+  ASSERT_EQ(rating.estimates.size(), 1u);
+  // The truth's local exponent d ln c / d ln a = β + 2 γ ln(a / 40 mm): 0.22 at 10 mm, 0.06 at
+  // 50 mm; a straight power law across them lies between.
+  EXPECT_GT(rating.estimates.front().value, 0.06);
+  EXPECT_LT(rating.estimates.front().value, 0.22);
+  expect_only_paying(m, "cd_opening_exponent");
+  // Where it acts: the rating changes the gain, so it removes most of the slow part of the
+  // residual, and at every operating point (the breakdown's share per group, measured by refit).
+  std::cout << breakdown_lines(c);
+  const auto column = static_cast<std::size_t>(
+      std::find(m.breakdown.choices.begin(), m.breakdown.choices.end(), "cd_opening_exponent") - m.breakdown.choices.begin());
+  ASSERT_LT(column, m.breakdown.choices.size());
+  for (const BreakdownGroup& g : m.breakdown.groups) {
+    if (g.axis == "operating point" || g.name == "slow (> 20 s)") {
+      EXPECT_GT(g.removed.at(column), 0.25) << g.axis << " " << g.name;
+    }
+  }
 }
 
 // The model's own form on other numerics: on the scenario's grid a time offset of a fraction of

@@ -568,5 +568,53 @@ TEST(SubmergedMultiplier, OutOfRangeIsRejectedNamingTheField) {
   EXPECT_NE(options.validate().message().find("submerged_discharge_coefficient_multiplier"), std::string::npos);
 }
 
+// --- a discharge coefficient varying with the opening ------------------------------------------
+
+SluiceGate rated_gate(double beta, double gamma, double reference, GateLaw law = GateLaw::swamee) {
+  SluiceGateOptions options;
+  options.law = law;
+  options.opening_exponent = beta;
+  options.opening_curvature = gamma;
+  options.reference_opening = reference;
+  return SluiceGate(options);
+}
+
+TEST(OpeningRating, MultipliesTheLawByItsClosedFormInEveryRegime) {
+  // c(a) = exp(β x + γ x²), x = ln(a / a_ref), computed here by hand, against the published law.
+  const double beta = 0.12, gamma = -0.07, reference = 0.03;
+  for (const GateLaw law : {GateLaw::swamee, GateLaw::simple}) {
+    SluiceGateOptions plain_options;
+    plain_options.law = law;
+    const SluiceGate rated = rated_gate(beta, gamma, reference, law), plain(plain_options);
+    for (const double a : {0.008, 0.015, 0.03, 0.037}) {  // below the simple law's cap, 0.641 y1
+      const double x = std::log(a / reference);
+      const double c = std::exp(beta * x + gamma * x * x);
+      for (const double y3 : {0.005, 0.04, 0.055}) {  // free, submerged, nearly drowned
+        EXPECT_NEAR(rated.discharge(0.06, y3, a), c * plain.discharge(0.06, y3, a), 1e-15) << a << ' ' << y3;
+      }
+    }
+  }
+}
+
+TEST(OpeningRating, AtItsReferenceOpeningAndWithoutExponentsIsThePublishedLaw) {
+  const SluiceGate published;
+  EXPECT_EQ(rated_gate(0.0, 0.0, 0.01).discharge(0.06, 0.045, 0.02), published.discharge(0.06, 0.045, 0.02));
+  EXPECT_NEAR(rated_gate(0.3, -0.2, 0.02).discharge(0.06, 0.045, 0.02), published.discharge(0.06, 0.045, 0.02), 1e-17);
+}
+
+TEST(OpeningRating, DerivativesMatchCentralDifferences) {
+  expect_derivatives_match_central_differences(rated_gate(0.15, -0.08, 0.025));
+  expect_derivatives_match_central_differences(rated_gate(-0.2, 0.1, 0.01, GateLaw::simple));
+}
+
+TEST(OpeningRating, OutOfRangeIsRejectedNamingTheField) {
+  SluiceGateOptions options;
+  options.opening_exponent = 2.5;
+  EXPECT_NE(options.validate().message().find("opening_exponent = 2.5: expected a value in [-2, 2]"), std::string::npos);
+  options = {};
+  options.reference_opening = 0.0;
+  EXPECT_NE(options.validate().message().find("reference_opening"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace canalsim::gates
