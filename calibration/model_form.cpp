@@ -9,6 +9,8 @@
 #include "calibration/calibrate.hpp"
 #include "calibration/time_offset.hpp"
 #include "core/format.hpp"
+#include "gates/sluice_gate.hpp"
+#include "scenarios/design.hpp"
 #include "scenarios/variation.hpp"
 
 namespace canalsim::calibration {
@@ -49,6 +51,35 @@ double middle_commanded_opening(const std::vector<Recording>& recordings) {
   return high > 0.0 ? std::sqrt(low * high) * 1e-3 : 0.0;
 }
 
+// The mean recorded level at the downstream end over the recordings, less the scenario's sensor
+// offsets [m]; NaN when a recording lacks it.
+double mean_end_level(const Scenario& s, const std::vector<Recording>& recordings) {
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (const Recording& r : recordings) {
+    if (!r.has(columns::level_downstream_end)) return std::numeric_limits<double>::quiet_NaN();
+    for (const double y : r.column(columns::level_downstream_end)) sum += y;
+    count += r.size();
+  }
+  const double offsets_mm = s.sensors.offset_mm + s.sensors.offset_y_dwe_mm;
+  return count > 0 ? (sum / static_cast<double>(count) - offsets_mm) * 1e-3 : std::numeric_limits<double>::quiet_NaN();
+}
+
+// A free weir in place of the downstream gate, its crest where it passes what the gate passes at
+// the mean recorded end level h: crest = h − (Q / (C w))^(2/3) (Q = C w (h − crest)^1.5,
+// scenarios/scenario.hpp), so the refit starts at the operating point the gate held.
+void put_weir_in_place_of_the_gate(Scenario& s, double end_level_m) {
+  const scenarios::GateSpec& gate = s.downstream.gate;
+  const double q = gates::SluiceGate(scenarios::gate_geometry(gate).law).discharge(end_level_m, s.downstream.tail_level_m, gate.opening_m) *
+                   gate.width_m;
+  const double width = s.pools.back().bottom_width_m;
+  const double wall = s.pools.back().wall_height_m;
+  s.downstream.kind = scenarios::DownstreamKind::weir;
+  s.downstream.weir_width_m = 0.0;  // the channel's width
+  const double head = std::pow(std::max(q, 0.0) / (s.downstream.weir_coefficient * width), 2.0 / 3.0);
+  s.downstream.weir_crest_m = std::clamp(end_level_m - head, 0.0, wall);
+}
+
 // The choices, in the order they are tried.
 std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings) {
   std::vector<FormChoice> out;
@@ -70,6 +101,19 @@ std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings) {
   out.push_back({"sensor_delay_s", "a time offset between the command and the levels",
                  [](const Scenario&, const std::vector<std::string>& specs) { return !fitted(specs, "sensor_delay_s"); },
                  [](Scenario&, std::vector<std::string>& specs) { specs.push_back("sensor_delay_s"); }});
+  out.push_back({"weir_crest_mm", "a free weir in place of the downstream gate, its crest fitted (the gate's opening, zero head and tail dropped)",
+                 [&recordings](const Scenario& x, const std::vector<std::string>&) {
+                   return x.downstream.kind == scenarios::DownstreamKind::gate && !x.downstream.gate.controlled &&
+                          !x.pools.empty() && std::isfinite(mean_end_level(x, recordings));
+                 },
+                 [&recordings](Scenario& x, std::vector<std::string>& specs) {
+                   put_weir_in_place_of_the_gate(x, mean_end_level(x, recordings));
+                   std::erase_if(specs, [](const std::string& spec) {
+                     const std::string name = spec.substr(0, spec.find(':'));
+                     return name.rfind("downstream_", 0) == 0 || name == "tail_level_mm";
+                   });
+                   specs.push_back("weir_crest_mm");
+                 }});
   out.push_back({"tail_level_mm", "the level beyond the downstream gate fitted",
                  [](const Scenario& x, const std::vector<std::string>& specs) {
                    return x.downstream.kind == scenarios::DownstreamKind::gate && !fitted(specs, "tail_level_mm");
@@ -250,6 +294,11 @@ ModelForms compare_model_forms(const Scenario& scenario, const Calibration& c, c
       if (k == b || !m.trials[k].pays) continue;
       Scenario both = alone[b].calibrated;  // from the best choice's estimates
       std::vector<std::string> both_specs = made_specs[b];
+      if (!choices[k].open(both, both_specs)) {  // a tail level beyond a weir that replaced the gate
+        m.trials[k].pays = false;
+        m.trials[k].note += "; does not apply with " + choices[b].name;
+        continue;
+      }
       choices[k].make(both, both_specs);
       const ModelFormTrial on_best = score(choices[k], refit(both, both_specs, choices[k].name + " with " + choices[b].name),
                                            alone[b], made_specs[b], m.effective_samples);

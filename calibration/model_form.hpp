@@ -6,7 +6,9 @@
 //      discharge coefficient that varies with the opening (a power law, the simplest gate
 //      rating; with the submerged multiplier's blend it varies with opening and submergence), the
 //      head gate's submerged law regularised near zero head, a time offset between the command
-//      and the levels, the level beyond the downstream gate. (The gate law itself is compared by
+//      and the levels, the level beyond the downstream gate; and one swap of structure, a free
+//      weir in place of a fixed downstream gate (its crest set where it passes what the gate
+//      passes at the mean recorded end level, then fitted; the gate's parameters dropped). (The gate law itself is compared by
 //      CalibrateOptions::gate_laws, each law calibrated from the scenario's values: the laws'
 //      coefficients mean different things, so one law's estimates are no start for the other.
 //      A finite actuator speed, paper eq. 16, is not among them: an ideal gate lies outside its
@@ -14,7 +16,7 @@
 //      taken by the time offset the calibration fits.)
 //   2. The calibration as it stands refitted on the same terms (the grid it started on, one
 //      start, no grid check), then each choice from the same estimates, its parameter starting
-//      where it changes nothing.
+//      where it changes nothing (the weir: where it holds the gate's operating point).
 //   3. Each choice scored by the Bayesian information criterion on the effective samples,
 //        ΔBIC = N_eff ln(cost / cost₀) + Δk ln N_eff,
 //      N_eff the fitted residuals over their autocorrelation inflation (calibrate.hpp: the
@@ -52,9 +54,9 @@ struct FormEstimate {
 
 // One model-form choice, refitted.
 struct ModelFormTrial {
-  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, tail_level_mm
+  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, weir_crest_mm, tail_level_mm
   std::string description;  // what the choice adds to the model, in words
-  int added_parameters = 0;
+  int added_parameters = 0;  // negative for a swap that drops more than it adds
   bool ok = false;
   std::string message;      // why the refit failed, when !ok
   double cost = 0.0;        // weighted cost per sample on the fitted recordings

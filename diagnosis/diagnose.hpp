@@ -24,6 +24,7 @@
 
 #include <functional>
 #include <map>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -88,7 +89,11 @@ struct DiagnoseOptions {
   double baseline_rms_mm = 0.0;  // >= 0
   // The same for each level channel (0 or missing: baseline_rms_mm stands for it).
   std::map<std::string, double> baseline_rms_by_channel;
-  double baseline_factor = 2.0;  // > 0
+  // √2: the RMS of the model's own error b and an effect as large as it, uncorrelated,
+  // sqrt(b² + b²). A residual below it leaves room only for an effect smaller than the model's
+  // error on clean recordings, which these recordings cannot tell from that error; beyond it an
+  // effect at least as large as the model's error is there, named or not.
+  double baseline_factor = std::numbers::sqrt2;  // > 0
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;  // share of the simulations done, and the stage

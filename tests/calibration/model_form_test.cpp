@@ -165,6 +165,29 @@ TEST(ModelForms, AGateRatingVaryingWithTheOpeningIsTheChoiceThatPays) {
   }
 }
 
+// A free weir where the model has a gate: its crest of 20 mm holds the lab's end levels within
+// 1.5 mm of the gate's (Q = 1.7 · 0.08 · (h − 0.020)^1.5 against the gate's rating at op1–op4),
+// but its discharge grows as the head's 3/2 power, the gate's as its square root. The default set
+// fits the gate's opening and zero head to it; the swap to a weir is the choice that pays.
+TEST(ModelForms, AWeirWhereTheModelHasAGateIsTheChoiceThatPays) {
+  Scenario truth = model();
+  truth.downstream.kind = scenarios::DownstreamKind::weir;
+  truth.downstream.weir_crest_m = 0.020;
+  const Calibration c = calibrated_with_forms(truth, {"op1", "op2", "op3", "op4"});
+  ASSERT_TRUE(c.ok) << c.message;
+  const ModelForms& m = c.model_forms;
+  ASSERT_TRUE(m.done) << m.message;
+  ASSERT_FALSE(m.trials.empty());
+  std::cout << model_form_lines(c);
+  EXPECT_EQ(m.trials.front().name, "weir_crest_mm") << model_form_lines(c);
+  const ModelFormTrial& weir = trial(m, "weir_crest_mm");
+  EXPECT_TRUE(weir.pays) << weir.note;
+  EXPECT_LT(weir.validation_rms_mm, m.validation_rms_mm);
+  ASSERT_EQ(weir.estimates.size(), 1u);
+  EXPECT_NEAR(weir.estimates.front().value, 20.0, 1.5);  // mm
+  expect_only_paying(m, "weir_crest_mm");
+}
+
 // The model's own form on other numerics: on the scenario's grid a time offset of a fraction of
 // a sample and the regularisation pay a little by standing in for the scheme's phase error and
 // the limiter; on twice the cells neither removes the share a change of form must.
