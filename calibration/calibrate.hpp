@@ -137,6 +137,8 @@ struct Series {
   bool validation = false;
   std::vector<double> t, recorded, nominal, calibrated;
   std::vector<double> u;  // the command that drove the replay [mm], for the report's step zoom
+  // The calibrated model's flow regime at each sample (RegimeCode), where the replay gives one.
+  std::vector<double> regime;
 };
 
 // One gate law of CalibrateOptions::gate_laws, calibrated.

@@ -44,7 +44,9 @@ void add_fits(const ReplayProblem& problem, const std::vector<Channels>& before,
     const auto& b = before[i].at(channel);
     const auto& a = after[i].at(channel);
     c.fits.push_back({r.name, channel, validation, rms(y, b), rms(y, a), nrmse_percent(y, b), nrmse_percent(y, a)});
-    c.series.push_back({r.name, channel, validation, r.t, y, b, a, r.u});
+    const auto regime = after[i].find(columns::regime);
+    c.series.push_back({r.name, channel, validation, r.t, y, b, a, r.u,
+                        regime == after[i].end() ? std::vector<double>{} : regime->second});
   });
 }
 

@@ -184,6 +184,9 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
       groups.add("operating point", op, r[k], at_k);
       groups.add("level", third_names[third[k]], r[k], at_k);
       groups.add("after a switch", switch_names[since[k] < soon ? 0 : since[k] < later ? 1 : 2], r[k], at_k);
+      if (s.regime.size() == r.size()) {
+        groups.add("regime", s.regime[k] == static_cast<double>(RegimeCode::submerged) ? "submerged" : "free", r[k], at_k);
+      }
     }
     const std::vector<std::vector<double>> parts = frequency_parts(r, s);
     std::vector<std::vector<std::vector<double>>> choice_parts(m);
@@ -197,7 +200,8 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
   }
   // The axes in the order of the header, each axis' groups in their own order (the recordings
   // as given).
-  const std::vector<std::string> order = {"operating point", "level", "low third", "middle third", "high third",
+  const std::vector<std::string> order = {"operating point", "regime", "free", "submerged",
+                                          "level", "low third", "middle third", "high third",
                                           "after a switch", switch_names[0], switch_names[1], switch_names[2],
                                           "frequency", band_names[0], band_names[1], band_names[2]};
   const auto rank = [&order](const std::string& name) {

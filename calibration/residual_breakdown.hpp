@@ -1,11 +1,13 @@
 // Where a calibrated model's level residual lives, and which model-form choice removes which
 // part of it. A coefficient removes an error everywhere a little; an error of the model's form
-// sits somewhere: at one operating point, at one end of a recording's level range (a static-gain
-// error that a constant coefficient cannot remove), in the seconds after a command switch (the
-// dynamics), or in one frequency band. The residual r = recorded − model of every level channel
-// is grouped along four axes:
+// sits somewhere: at one operating point or flow regime, at one end of a recording's level range
+// (a static-gain error that a constant coefficient cannot remove), in the seconds after a command
+// switch (the dynamics), or in one frequency band. The residual r = recorded − model of every
+// level channel is grouped along five axes:
 //
 //   operating point   each recording (validation recordings marked)
+//   regime            free or submerged flow by the paper's conditions (8)/(10), as the
+//                     calibrated model has it at each sample (when the replay gives a regime)
 //   level             each recording and channel's own thirds of the recorded level
 //   after a switch    time since the command last changed, in thirds over every series (the
 //                     edges in the group's name: "< 0.5 s", "0.5 s to 1.4 s", "> 1.4 s"; samples
@@ -28,7 +30,7 @@ namespace canalsim::calibration {
 struct Series;
 
 struct BreakdownGroup {
-  std::string axis;   // "operating point", "level", "after a switch", "frequency"
+  std::string axis;   // "operating point", "regime", "level", "after a switch", "frequency"
   std::string name;   // "op1", "op3b (validation)", "low third", "< 0.5 s", "slow (> 20 s)"
   std::size_t samples = 0;
   double rms_mm = 0.0;   // RMS of the level residual in the group

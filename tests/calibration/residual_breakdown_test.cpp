@@ -79,6 +79,21 @@ TEST(ResidualBreakdown, AStaticErrorAtHighLevelsSitsInTheTopThirdAndInTheSlowBan
   EXPECT_EQ(op.samples, model.front().t.size());
 }
 
+// The model's regime marks where the offset lives: submerged at the top of the level (as a
+// rising tailwater drowns the gate), free elsewhere. Without a regime there is no regime axis.
+TEST(ResidualBreakdown, TheRegimeAxisFollowsTheModelsRegimeAtEachSample) {
+  Series s = series("op1", 0.2, 0.0, 0.0);
+  for (std::size_t k = 0; k < s.t.size(); ++k) s.regime.push_back(s.recorded[k] - s.calibrated[k] > 0.1 ? 1.0 : 0.0);
+  const ResidualBreakdown b = residual_breakdown({s});
+  EXPECT_NEAR(group(b, "regime", "submerged").mean_mm, 0.2, 1e-12);
+  EXPECT_NEAR(group(b, "regime", "free").rms_mm, 0.0, 1e-12);
+  EXPECT_EQ(group(b, "regime", "submerged").samples + group(b, "regime", "free").samples, s.t.size());
+  // In the axes' order: after the operating points.
+  EXPECT_EQ(b.groups.at(1).axis, "regime");
+  const ResidualBreakdown without = residual_breakdown({series("op1", 0.2, 0.0, 0.0)});
+  for (const BreakdownGroup& g : without.groups) EXPECT_NE(g.axis, "regime");
+}
+
 TEST(ResidualBreakdown, ATransientAfterEachSwitchSitsInTheSoonestThird) {
   const std::vector<Series> model = {series("op2", 0.0, 0.3, 0.05)};
   const std::vector<Series> dynamics = {series("op2", 0.0, 0.0, 0.05)};
@@ -108,7 +123,7 @@ TEST(ResidualBreakdown, OtherChannelsAreLeftOutAndAMismatchedChoiceHasNoShare) {
   Series validation = series("op3b", 0.1, 0.0, 0.0);
   validation.validation = true;
   const std::vector<Series> model = {series("op1", 0.0, 0.0, 0.05), discharge, validation};
-  const std::vector<Series> shorter = {Series{"op1", "y_dwe_mm", false, {0.0}, {1.0}, {1.0}, {1.0}, {0.0}}};
+  const std::vector<Series> shorter = {Series{"op1", "y_dwe_mm", false, {0.0}, {1.0}, {1.0}, {1.0}, {0.0}, {}}};
   const ResidualBreakdown b = residual_breakdown(model, {{"other", &shorter}});
   EXPECT_NEAR(group(b, "operating point", "op1").rms_mm, 0.05, 1e-9);  // not the discharge's 1 l/s
   EXPECT_EQ(group(b, "operating point", "op3b (validation)").samples, validation.t.size());
