@@ -38,6 +38,7 @@ Status ReservoirOptions::validate() const {
       .require(in_range(derivative_time, 0.0, 1e6, false), "derivative_time", derivative_time,
                "a value in [0, 1e+06] s")
       .require(in_range(tracking_time, 0.0, 1e6, true), "tracking_time", tracking_time, "a value in (0, 1e+06] s")
+      .require(in_range(pump_lag, 0.0, 1e4, false), "pump_lag", pump_lag, "a value in [0, 10000] s")
       .require(std::isfinite(min_frequency) && min_frequency >= 0.0 && min_frequency < max_frequency,
                "min_frequency", min_frequency, "a value in [0, max_frequency = " + format_g(max_frequency) + ") Hz")
       .require(anti_windup == AntiWindup::none || anti_windup == AntiWindup::conditional_integration ||
@@ -59,6 +60,7 @@ void Reservoir::start_at_steady_state(double outflow) {
   const double error = options_.setpoint - level();
   integral_ = f - options_.proportional_gain * error;
   frequency_ = f;
+  pump_flow_ = f * options_.flow_per_hz;
 }
 
 void Reservoir::update_integral(double dt, double error, double unsaturated) {
@@ -80,6 +82,19 @@ void Reservoir::update_integral(double dt, double error, double unsaturated) {
   }
 }
 
+double Reservoir::pump_lagged_flow(double dt) {
+  // The lag integrated exactly for the drive held over the step; without one the pump follows it.
+  const double commanded = frequency_ * options_.flow_per_hz;
+  if (options_.pump_lag == 0.0) {
+    pump_flow_ = commanded;
+    return commanded * dt;
+  }
+  const double decay = -std::expm1(-dt / options_.pump_lag);  // 1 − e^(−dt/τ), exact for small steps
+  const double volume = commanded * dt + (pump_flow_ - commanded) * options_.pump_lag * decay;
+  pump_flow_ += (commanded - pump_flow_) * decay;
+  return volume;
+}
+
 double Reservoir::advance(double dt, double outflow) {
   if (!(dt > 0.0) || !std::isfinite(outflow)) {
     throw std::invalid_argument("reservoir: dt must be > 0 and the outflow finite");
@@ -93,8 +108,7 @@ double Reservoir::advance(double dt, double outflow) {
   saturated_ = frequency_ != unsaturated;
   update_integral(dt, error, unsaturated);
 
-  // Exact balance for the flows held over the step.
-  const double inflow_volume = pump_flow() * dt;
+  const double inflow_volume = pump_lagged_flow(dt);
   const double outflow_volume = outflow * dt;
   volume_ += inflow_volume - outflow_volume;
   total_inflow_ += inflow_volume;

@@ -4,9 +4,11 @@
 //
 // Model (prismatic reservoir of plan area A, level y measured from the gate sill):
 //
-//   dV/dt = Q_pump - Q_out,      y = V / A,      Q_pump = k_q f,   f in [f_min, f_max]
+//   dV/dt = Q_pump - Q_out,      y = V / A,      tau dQ_pump/dt = k_q f - Q_pump,   f in [f_min, f_max]
 //
-// with the pump flow proportional to its frequency f (k_q = flow_per_hz), and the controller
+// with the pump flow proportional to its frequency f (k_q = flow_per_hz) after a first-order lag
+// tau (pump_lag; 0, the default, makes Q_pump = k_q f: the drive's ramp and the water column's
+// inertia are then taken as instant), and the controller
 //
 //   f_unsat = Kp (e + I - Td dy/dt),  dI/dt = e / Ti,  e = y_set - y,  f = clamp(f_unsat, f_min, f_max)
 //
@@ -19,8 +21,9 @@
 // Control, 2006, Sec. 3.5).
 //
 // advance(dt, Q_out) holds the pump frequency and the outflow constant over the step and
-// integrates the volume exactly for them (explicit in the controller, exact in the balance):
-// V(t + dt) = V(t) + (Q_pump - Q_out) dt. Given the outflow the solver used through the gate,
+// integrates the lag and the volume exactly for them (explicit in the controller, exact in the
+// balance): Q_pump(t + dt) = k_q f + (Q_pump(t) - k_q f) e^(-dt/tau) and
+// V(t + dt) = V(t) + k_q f dt + (Q_pump(t) - k_q f) tau (1 - e^(-dt/tau)) - Q_out dt. Given the outflow the solver used through the gate,
 // mass is therefore conserved to round-off; cumulative inflow and outflow volumes are kept for
 // the balance check.
 #pragma once
@@ -56,6 +59,7 @@ struct ReservoirOptions {
   double derivative_time = 0.0;            // Td [s], range [0, 1e6]
   AntiWindup anti_windup = AntiWindup::back_calculation;
   double tracking_time = 1.0;              // T_t [s] for back-calculation, range (0, 1e6]
+  double pump_lag = 0.0;                   // tau [s], range [0, 1e4]: the pump's flow behind its drive
 
   // Ok, or one line naming the field and its allowed range (core/status.hpp).
   [[nodiscard]] Status validate() const;
@@ -82,7 +86,7 @@ class Reservoir {
   double volume() const { return volume_; }
   double initial_volume() const { return initial_volume_; }
   double frequency() const { return frequency_; }       // pump frequency of the last step [Hz]
-  double pump_flow() const { return frequency_ * options_.flow_per_hz; }  // [m^3/s]
+  double pump_flow() const { return pump_flow_; }      // the pump's flow at the end of the last step [m^3/s]
   double integral() const { return integral_; }         // integral term Kp I [Hz]
   bool saturated() const { return saturated_; }
   double total_inflow() const { return total_inflow_; }    // cumulative pump volume [m^3]
@@ -93,12 +97,15 @@ class Reservoir {
 
  private:
   void update_integral(double dt, double error, double unsaturated);
+  // Moves the pump's flow dt seconds towards what the drive commands; returns the volume pumped.
+  double pump_lagged_flow(double dt);
 
   ReservoirOptions options_;
   double volume_ = 0.0;
   double initial_volume_ = 0.0;
   double integral_ = 0.0;
   double frequency_ = 0.0;
+  double pump_flow_ = 0.0;
   double previous_level_ = 0.0;
   bool saturated_ = false;
   double total_inflow_ = 0.0;

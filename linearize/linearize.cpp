@@ -166,17 +166,31 @@ OutputHandle find_output(BuiltCanal& b, const scenarios::Scenario& s, const scen
 //   f = (K_p e + I + K_p T_d Q/A_p) / (1 + K_p T_d k_q / A_p)   (derivative on ẏ = (k_q f − Q)/A_p)
 //   dV/dt = k_q f − Q,     dI/dt = K_p e / T_i        (I in Hz, as the reservoir keeps it)
 // where Q is the head gate's discharge. A saturated pump holds f: V alone, dV/dt = k_q f − Q.
+// A pump with a lag τ adds its flow Q_p as the last state:
+//   f = K_p (e − T_d (Q_p − Q)/A_p) + I,   dV/dt = Q_p − Q,   dQ_p/dt = (k_q f − Q_p) / τ
+// (f held when saturated).
 struct ReservoirRows {
   const gates::ReservoirOptions* o = nullptr;
   bool saturated = false;
-  int states() const { return o ? (saturated ? 1 : 2) : 0; }
-  // d(dV/dt), d(dI/dt) for a column that changes Q by dq, V by dv, I by di.
-  std::array<double, 2> rows(double dq, double dv, double di) const {
+  bool lagged() const { return o && o->pump_lag > 0.0; }
+  int states() const { return o ? 1 + (saturated ? 0 : 1) + (lagged() ? 1 : 0) : 0; }
+  int integral_state() const { return 1; }                         // when not saturated
+  int pump_state() const { return saturated ? 1 : 2; }              // when lagged
+  // d(dV/dt), d(dI/dt), d(dQ_p/dt) for a column that changes Q by dq, V by dv, I by di, Q_p by dp,
+  // in the order of the states.
+  std::array<double, 3> rows(double dq, double dv, double di, double dp) const {
     const double de = -dv / o->plan_area;
-    if (saturated) return {-dq, 0.0};
-    const double kappa = o->proportional_gain * o->derivative_time / o->plan_area;
-    const double df = (o->proportional_gain * de + di + kappa * dq) / (1.0 + kappa * o->flow_per_hz);
-    return {o->flow_per_hz * df - dq, o->proportional_gain * de / o->integral_time};
+    const double kp = o->proportional_gain;
+    if (lagged()) {
+      const double df = saturated ? 0.0 : kp * (de - o->derivative_time * (dp - dq) / o->plan_area) + di;
+      const double pump_row = (o->flow_per_hz * df - dp) / o->pump_lag;
+      if (saturated) return {dp - dq, pump_row, 0.0};
+      return {dp - dq, kp * de / o->integral_time, pump_row};
+    }
+    if (saturated) return {-dq, 0.0, 0.0};
+    const double kappa = kp * o->derivative_time / o->plan_area;
+    const double df = (kp * de + di + kappa * dq) / (1.0 + kappa * o->flow_per_hz);
+    return {o->flow_per_hz * df - dq, kp * de / o->integral_time, 0.0};
   }
 };
 
@@ -238,9 +252,9 @@ struct Assembly {
   }
 
   // The reservoir rows of a column (into A) or of the input (into B when `vector`).
-  void add_reservoir_rows(int column, double dq, double dv, double di, Eigen::VectorXd* vector = nullptr) {
+  void add_reservoir_rows(int column, double dq, double dv, double di, double dp, Eigen::VectorXd* vector = nullptr) {
     if (!reservoir.o) return;
-    const auto rows = reservoir.rows(dq, dv, di);
+    const auto rows = reservoir.rows(dq, dv, di, dp);
     for (int k = 0; k < reservoir.states(); ++k) {
       const double value = rows[static_cast<std::size_t>(k)];
       if (value == 0.0) continue;
@@ -319,13 +333,13 @@ struct Assembly {
           solver::load_state(canal(), u.data());
         }, h);
         sys.C(static_cast<int>(j)) = d.out;
-        add_reservoir_rows(static_cast<int>(j), d.gate_q, 0.0, 0.0);
+        add_reservoir_rows(static_cast<int>(j), d.gate_q, 0.0, 0.0, 0.0);
       }
     }
   }
 
   // The reservoir's columns: its volume changes the head gate's flux (rates near the gate, the
-  // output when it is the gate's discharge); its integral acts on the pump only.
+  // output when it is the gate's discharge); its integral and a lagged pump's flow act on the reservoir rows only.
   void add_reservoir_columns() {
     if (!reservoir.o) return;
     gates::Reservoir& tank = built.reservoir->reservoir();
@@ -336,8 +350,9 @@ struct Assembly {
       if (value != 0.0) triplets.emplace_back(row, unknowns, value);
     }
     sys.C(unknowns) = d.out;
-    add_reservoir_rows(unknowns, d.gate_q, 1.0, 0.0);
-    if (!reservoir.saturated) add_reservoir_rows(unknowns + 1, 0.0, 0.0, 1.0);
+    add_reservoir_rows(unknowns, d.gate_q, 1.0, 0.0, 0.0);
+    if (!reservoir.saturated) add_reservoir_rows(unknowns + reservoir.integral_state(), 0.0, 0.0, 1.0, 0.0);
+    if (reservoir.lagged()) add_reservoir_rows(unknowns + reservoir.pump_state(), 0.0, 0.0, 0.0, 1.0);
   }
 
   // B and D.
@@ -346,7 +361,7 @@ struct Assembly {
     const Probe d = probe([&](double delta) { input.set(operating + delta); }, kProbeStep * input.scale);
     for (int row = 0; row < unknowns; ++row) sys.B(row) = d.rates[static_cast<std::size_t>(row)];
     sys.D = d.out;
-    add_reservoir_rows(-1, d.gate_q, 0.0, 0.0, &sys.B);
+    add_reservoir_rows(-1, d.gate_q, 0.0, 0.0, 0.0, &sys.B);
   }
 
   void finish() {

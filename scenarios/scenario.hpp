@@ -102,6 +102,7 @@ struct UpstreamSpec {
   double pid_kp = 2000.0;           // Hz per m of level error
   double pid_ti_s = 5.0;            // integral time
   double pid_td_s = 0.0;            // derivative time
+  double pump_lag_s = 0.0;          // first-order lag of the pump's flow behind its drive (0: none)
 };
 
 enum class DownstreamKind { gate, weir, level, closed, pump };

@@ -106,6 +106,7 @@ UpstreamSpec read_upstream(TomlTable t) {
   u.pid_kp = t.number("pid_kp", u.pid_kp, {0.0, 1.0e9}, "Hz/m");
   u.pid_ti_s = t.number("pid_ti_s", u.pid_ti_s, {0.0, 1.0e9, true}, "s");
   u.pid_td_s = t.number("pid_td_s", u.pid_td_s, {0.0, 1.0e6}, "s");
+  u.pump_lag_s = t.number("pump_lag_s", u.pump_lag_s, {0.0, 1.0e4}, "s");
   t.reject_unknown_keys();
   return u;
 }

@@ -139,6 +139,7 @@ std::shared_ptr<gates::Supply> make_supply(const Scenario& s, const ExperimentSp
     o.proportional_gain = u.pid_kp;
     o.integral_time = u.pid_ti_s;
     o.derivative_time = u.pid_td_s;
+    o.pump_lag = u.pump_lag_s;
     if (const Status status = o.validate(); !status) throw InputError(s.source + ": upstream: " + status.message());
     *reservoir = std::make_shared<gates::ReservoirSupply>(o);
     return *reservoir;

@@ -106,6 +106,31 @@ TEST(Reservoir, VolumeBalanceIsExactForTheOutflowUsed) {
   EXPECT_NEAR(tank.level() * tank.options().plan_area, tank.volume(), 1e-17);
 }
 
+// A pump with its own lag, driven to its top frequency by a large demand, approaches its top flow
+// as 1 − e^(−t/τ), and the volume follows the integral of that flow in closed form.
+TEST(Reservoir, ALaggedPumpApproachesItsDriveExponentiallyAndConservesVolume) {
+  ReservoirOptions options;
+  options.plan_area = 1.0;           // a wide tank: the level moves millimetres, the pump saturates
+  options.proportional_gain = 1e9;   // at the second step, and stays there
+  options.pump_lag = 2.0;
+  Reservoir tank(options);
+  const double start_flow = 1.5e-3, top_flow = 50.0 * options.flow_per_hz, demand = 3.2e-3;
+  tank.start_at_steady_state(start_flow);
+  tank.advance(dt, demand);  // the first step: on the setpoint, the drive holds 25 Hz
+  EXPECT_NEAR(tank.pump_flow(), start_flow, 1e-15);
+  const double v1 = tank.volume();
+  for (int i = 1; i <= 1000; ++i) {
+    tank.advance(dt, demand);
+    ASSERT_TRUE(tank.saturated()) << "step " << i;
+    const double t = i * dt;  // since the drive went to the top
+    const double decay = std::exp(-t / options.pump_lag);
+    EXPECT_NEAR(tank.pump_flow(), top_flow + (start_flow - top_flow) * decay, 1e-15) << "t = " << t;
+    const double pumped = top_flow * t + (start_flow - top_flow) * options.pump_lag * (1.0 - decay);
+    EXPECT_NEAR(tank.volume() - v1, pumped - demand * t, 1e-15) << "t = " << t;
+  }
+  EXPECT_LT(std::abs(tank.volume_balance_error()), 1e-12 * tank.volume());
+}
+
 TEST(Reservoir, ValidationNamesTheFieldAndRange) {
   ReservoirOptions options;
   EXPECT_TRUE(options.validate());
@@ -116,6 +141,9 @@ TEST(Reservoir, ValidationNamesTheFieldAndRange) {
   options = {};
   options.min_frequency = 60.0;
   EXPECT_NE(options.validate().message().find("min_frequency"), std::string::npos);
+  options = {};
+  options.pump_lag = -1.0;
+  EXPECT_NE(options.validate().message().find("pump_lag = -1: expected a value in [0, 10000] s"), std::string::npos);
 }
 
 }  // namespace
