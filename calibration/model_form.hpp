@@ -6,7 +6,9 @@
 //      discharge coefficient that varies with the opening (a power law, the simplest gate
 //      rating; with the submerged multiplier's blend it varies with opening and submergence), the
 //      head gate's submerged law regularised near zero head, a time offset between the command
-//      and the levels, the level beyond the downstream gate; and one swap of structure, a free
+//      and the levels, the level beyond the downstream gate, and — where the scenario's reservoir
+//      feeds the head gate — a pump whose flow lags its drive and the pump controller's gains;
+//      and one swap of structure, a free
 //      weir in place of a fixed downstream gate (its crest set where it passes what the gate
 //      passes at the mean recorded end level, then fitted; the gate's parameters dropped). (The gate law itself is compared by
 //      CalibrateOptions::gate_laws, each law calibrated from the scenario's values: the laws'
@@ -54,7 +56,7 @@ struct FormEstimate {
 
 // One model-form choice, refitted.
 struct ModelFormTrial {
-  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, weir_crest_mm, tail_level_mm
+  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, weir_crest_mm, pump_lag_s, pump_controller, tail_level_mm
   std::string description;  // what the choice adds to the model, in words
   int added_parameters = 0;  // negative for a swap that drops more than it adds
   bool ok = false;

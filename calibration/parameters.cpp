@@ -158,6 +158,10 @@ void add_reservoir(const Scenario& s, std::vector<Parameter>& out) {
   out.push_back(make("pid_ti_s", "s", "upstream.pid_ti_s", "integral time of the pump's level PID", 0.01, 1000.0,
                      Transform::log, 0.01, [](const Scenario& x) { return x.upstream.pid_ti_s; },
                      [](Scenario& x, double v) { x.upstream.pid_ti_s = v; }));
+  // Linear from 0, the ideal pump: a model-form refit starts there, where the lag changes nothing.
+  out.push_back(make("pump_lag_s", "s", "upstream.pump_lag_s", "lag of the pump's flow behind its drive", 0.0, 60.0,
+                     Transform::linear, 0.05, [](const Scenario& x) { return x.upstream.pump_lag_s; },
+                     [](Scenario& x, double v) { x.upstream.pump_lag_s = v; }));
 }
 
 }  // namespace

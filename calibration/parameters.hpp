@@ -21,6 +21,7 @@
 //   actuator_speed_mm_s     mm/s      head_gate.actuator_speed_m_s (eq. 16)        log
 //   pump_gain               m³/s/Hz   upstream.pump_m3s_per_hz                     log
 //   pid_kp, pid_ti_s        Hz/m, s   upstream.pid_kp, upstream.pid_ti_s           log
+//   pump_lag_s              s         upstream.pump_lag_s                          linear
 //
 // Roughness and coefficients are searched in log: they act multiplicatively and must stay
 // positive. With more than one pool, the per-pool entries are named manning_n.1, manning_n.2, ...
