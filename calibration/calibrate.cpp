@@ -262,6 +262,34 @@ Run first_run(ReplayProblem& fit, TwiceTheCells& twice, const std::vector<double
   return best;
 }
 
+// The start z moved, for each parameter with a scan (Parameter::scan), to the value of its scan
+// or z's own that leaves the lowest cost, the parameters before it as moved and the others as
+// they start: one simulation per recording and value. Says in c.scan_note what it found.
+std::vector<double> start_at_the_scans(ReplayProblem& fit, std::vector<double> z, double cost_at_z, Calibration& c) {
+  const std::vector<Parameter>& parameters = fit.parameters();
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    const Parameter& p = parameters[j];
+    if (p.scan.empty()) continue;
+    double best_z = z[j];
+    std::string tried = format_g(p.from_search(z[j]), 3);
+    for (const double value : p.scan) {
+      if (value < p.low || value > p.high) continue;
+      std::vector<double> trial = z;
+      trial[j] = p.to_search(value);
+      const double cost = cost_per_sample(fit.residuals(fit.predict(trial)));
+      tried += ", " + format_g(value, 3);
+      if (cost < cost_at_z) {
+        cost_at_z = cost;
+        best_z = trial[j];
+      }
+    }
+    z[j] = best_z;
+    c.scan_note += (c.scan_note.empty() ? "" : "; ") + p.name + " started at " + format_g(p.from_search(best_z), 3) + " " + p.unit +
+                   ", the lowest cost of " + tried;
+  }
+  return z;
+}
+
 // The starts after the first (the best of points screened over the bounds): run when the first
 // optimum is doubtful, or always without further_starts_only_when_doubtful; each scouts with a
 // loose tolerance and is continued precisely only when it ends below the best so far (it mostly
@@ -382,8 +410,10 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     const std::vector<Channels> nominal = fit.predict(z0);
     c.cost_before = cost_per_sample(fit.residuals(nominal));
     TwiceTheCells twice(fit);
-    Run best = first_run(fit, twice, z0, o, follows, from_coarser != nullptr, c);
-    run_further_starts(fit, twice, z0, o, follows, best, c);
+    // A refined grid starts from the coarser grid's estimates, past any scan.
+    const std::vector<double> z_start = from_coarser ? z0 : start_at_the_scans(fit, z0, c.cost_before, c);
+    Run best = first_run(fit, twice, z_start, o, follows, from_coarser != nullptr, c);
+    run_further_starts(fit, twice, z_start, o, follows, best, c);
     if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");
     const std::vector<Channels> optimum = fit.predict(best.z);
     const std::vector<double> r = fit.residuals(optimum);
@@ -524,6 +554,7 @@ void carry_over(Calibration& later, Calibration&& earlier) {
   for (std::size_t j = 0; j < later.parameters.size(); ++j) later.parameters[j].start = earlier.parameters[j].start;
   later.starts = earlier.starts;
   later.starts_note = std::move(earlier.starts_note);
+  later.scan_note = std::move(earlier.scan_note);
   later.gate_laws = std::move(earlier.gate_laws);
   later.time_offset_note = std::move(earlier.time_offset_note);
   std::vector<std::vector<int>> grids = std::move(earlier.grids);
@@ -662,6 +693,7 @@ Calibration fit_time_offset(Calibration c, const Scenario& given, const std::vec
   again.parameters.back().start = given.sensors.delay_s;
   again.starts = c.starts;
   again.starts_note = c.starts_note;
+  again.scan_note = c.scan_note;
   again.time_offset_note = found + "; sensor_delay_s fitted with the default set (its estimate in the table)";
   again.simulations += c.simulations;
   again.iterations += c.iterations;

@@ -170,6 +170,9 @@ struct Calibration {
   // further starts ran there, or why not.
   int starts = 0;
   std::string starts_note;
+  // Where a parameter's scan (Parameter::scan) moved its start on the scenario's grid: to what,
+  // among which values.
+  std::string scan_note;
   double seconds = 0.0;
   std::string solver_report; // Ceres' one-line summary of the best run
   // The simulations' warnings, the first per recording (a failed steady state: the replay then

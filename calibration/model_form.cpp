@@ -7,8 +7,6 @@
 #include <limits>
 
 #include "calibration/calibrate.hpp"
-#include "calibration/parameters.hpp"
-#include "calibration/problem.hpp"
 #include "calibration/time_offset.hpp"
 #include "core/format.hpp"
 #include "gates/sluice_gate.hpp"
@@ -30,17 +28,12 @@ bool fitted(const std::vector<std::string>& specs, const std::string& name) {
 
 // A model-form choice: when it is open, and the model with it made (the scenario edited, the
 // parameters it adds appended to the specs, each starting where it changes nothing, or as near as
-// its bounds allow: the refit then never ends above the calibration it extends).
-// A parameter whose cost is not monotone from where it changes nothing has a `scan`: the refit
-// starts from the value of it, among those and the start, that leaves the lowest cost (a pump's
-// lag first rings the reservoir's loop out of phase with a truth's slower lag, so the cost rises
-// from 0 before it falls towards the truth, and a refit from 0 stays there).
+// its bounds allow: the refit then never ends above the calibration it extends; a parameter with
+// a scan, Parameter::scan, starts where its scan finds the lowest cost).
 struct FormChoice {
   std::string name, description;
   std::function<bool(const Scenario&, const std::vector<std::string>& specs)> open;
   std::function<void(Scenario&, std::vector<std::string>& specs)> make;
-  std::string scanned;        // the added parameter scanned, when the cost is not monotone in it
-  std::vector<double> scan;   // its values tried, in its unit
 };
 
 // The geometric mean of the smallest and largest positive opening the recordings command [m], or
@@ -109,14 +102,13 @@ std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings, c
                    // Where the rating is 1 (β = γ = 0 as the refit starts) its reference moves nothing.
                    if (g.cd_opening_exponent == 0.0 && g.cd_opening_curvature == 0.0) g.cd_reference_opening_m = reference_opening;
                    specs.push_back("cd_opening_exponent");
-                 },
-                 "", {}});
+                 }});
   out.push_back({"zero_head_mm", "the head gate's submerged law linear in the head below a fitted head h0 (a gate running nearly drowned)",
                  [](const Scenario& x, const std::vector<std::string>& specs) { return x.head_gate && !fitted(specs, "zero_head_mm"); },
-                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("zero_head_mm"); }, "", {}});
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("zero_head_mm"); }});
   out.push_back({"sensor_delay_s", "a time offset between the command and the levels",
                  [](const Scenario&, const std::vector<std::string>& specs) { return !fitted(specs, "sensor_delay_s"); },
-                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("sensor_delay_s"); }, "", {}});
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("sensor_delay_s"); }});
   out.push_back({"weir_crest_mm", "a free weir in place of the downstream gate, its crest fitted (the gate's opening, zero head and tail dropped)",
                  [&recordings](const Scenario& x, const std::vector<std::string>&) {
                    return x.downstream.kind == scenarios::DownstreamKind::gate && !x.downstream.gate.controlled &&
@@ -129,8 +121,7 @@ std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings, c
                      return name.rfind("downstream_", 0) == 0 || name == "tail_level_mm";
                    });
                    specs.push_back("weir_crest_mm");
-                 },
-                 "", {}});
+                 }});
   // The upstream supply, where the scenario's reservoir drives the replay: a pump whose flow lags
   // its drive (a drive's ramp, the inertia of the pump and its pipe), and the level controller's
   // gains as the recorded upstream level shows them (the scenario's are a set-up's guess). The
@@ -142,50 +133,18 @@ std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings, c
     };
   };
   out.push_back({"pump_lag_s", "the pump's flow lagging its drive, τ dQ/dt = k_q f − Q (a pump with its own lag)", pump_open("pump_lag_s"),
-                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("pump_lag_s"); }, "pump_lag_s",
-                 {0.25, 0.5, 1.0, 2.0, 4.0, 8.0}});
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("pump_lag_s"); }});
   out.push_back({"pump_controller", "the pump's level controller's gains K_p and T_i fitted", pump_open("pid_kp"),
                  [](Scenario&, std::vector<std::string>& specs) {
                    if (!fitted(specs, "pid_kp")) specs.push_back("pid_kp");
                    if (!fitted(specs, "pid_ti_s")) specs.push_back("pid_ti_s");
-                 },
-                 "", {}});
+                 }});
   out.push_back({"tail_level_mm", "the level beyond the downstream gate fitted",
                  [](const Scenario& x, const std::vector<std::string>& specs) {
                    return x.downstream.kind == scenarios::DownstreamKind::gate && !fitted(specs, "tail_level_mm");
                  },
-                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("tail_level_mm"); }, "", {}});
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("tail_level_mm"); }});
   return out;
-}
-
-// Puts choice's scanned parameter in `s` at the value of its scan (or its value in `s`) that leaves
-// the lowest cost with every other parameter as it is: one simulation per recording and value.
-// Returns what was done, in words, for the trial's note; empty without a scan.
-std::string start_from_the_best_scanned(const FormChoice& choice, Scenario& s, const std::vector<std::string>& specs,
-                                        const std::vector<Recording>& recordings, const ReplayOptions& replay, int threads,
-                                        int* simulations) {
-  if (choice.scan.empty()) return "";
-  const std::vector<Parameter> parameters = select_parameters(s, specs);
-  const auto scanned = std::find_if(parameters.begin(), parameters.end(), [&](const Parameter& p) { return p.name == choice.scanned; });
-  if (scanned == parameters.end()) return "";
-  ReplayProblem problem(s, parameters, recordings, replay, threads);
-  std::vector<double> values = {scanned->get(s)};
-  values.insert(values.end(), choice.scan.begin(), choice.scan.end());
-  double best_value = values.front(), best_cost = std::numeric_limits<double>::infinity();
-  std::string tried;
-  for (const double v : values) {
-    Scenario trial = s;
-    scanned->set(trial, v);
-    const double cost = cost_per_sample(problem.residuals(problem.predict(trial)));
-    tried += (tried.empty() ? "" : ", ") + format_g(v, 3);
-    if (cost < best_cost) {
-      best_cost = cost;
-      best_value = v;
-    }
-  }
-  *simulations += problem.simulations();
-  scanned->set(s, best_value);
-  return "refitted from " + choice.scanned + " = " + format_g(best_value, 3) + " " + scanned->unit + ", the lowest cost of " + tried;
 }
 
 // RMS level residual over the validation recordings' level channels [mm]; NaN without them.
@@ -324,11 +283,9 @@ ModelForms compare_model_forms(const Scenario& scenario, const Calibration& c, c
   std::vector<Calibration> alone;
   for (std::size_t k = 0; k < choices.size(); ++k) {
     choices[k].make(made[k], made_specs[k]);
-    const std::string start = start_from_the_best_scanned(choices[k], made[k], made_specs[k], recordings,
-                                                          refit_options(c, o, made_specs[k]).replay, o.threads, &m.simulations);
     alone.push_back(refit(made[k], made_specs[k], choices[k].name));
     m.trials.push_back(score(choices[k], alone.back(), base, specs, m.effective_samples));
-    m.trials.back().note = start;
+    m.trials.back().note = alone.back().scan_note;
   }
 
   // On the scenario's grid a choice can pay by standing in for the discretisation (a time offset
@@ -370,8 +327,6 @@ ModelForms compare_model_forms(const Scenario& scenario, const Calibration& c, c
         continue;
       }
       choices[k].make(both, both_specs);
-      start_from_the_best_scanned(choices[k], both, both_specs, recordings, refit_options(c, o, both_specs).replay, o.threads,
-                                  &m.simulations);
       const ModelFormTrial on_best = score(choices[k], refit(both, both_specs, choices[k].name + " with " + choices[b].name),
                                            alone[b], made_specs[b], m.effective_samples);
       // Beyond the best as on twice the cells: a material share of what is left, not a sliver

@@ -18,7 +18,8 @@
 //      taken by the time offset the calibration fits.)
 //   2. The calibration as it stands refitted on the same terms (the grid it started on, one
 //      start, no grid check), then each choice from the same estimates, its parameter starting
-//      where it changes nothing (the weir: where it holds the gate's operating point).
+//      where it changes nothing (the weir: where it holds the gate's operating point; the pump's
+//      lag, whose cost is not monotone from 0, at the best value of a scan).
 //   3. Each choice scored by the Bayesian information criterion on the effective samples,
 //        ΔBIC = N_eff ln(cost / cost₀) + Δk ln N_eff,
 //      N_eff the fitted residuals over their autocorrelation inflation (calibrate.hpp: the

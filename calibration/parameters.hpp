@@ -53,6 +53,10 @@ struct Parameter {
   // The low bound is the law as published (a regularisation of 0), not a guess: an estimate
   // that rests there is an answer — the recordings show none — not a doubtful optimum.
   bool low_is_published = false;
+  // Values [unit] a calibration tries before it starts, where the cost is not monotone from the
+  // scenario's value (a pump's lag rings the reservoir's loop): it starts from the one of these
+  // and the scenario's value that leaves the lowest cost. Empty: it starts at the scenario's.
+  std::vector<double> scan;
   std::function<double(const scenarios::Scenario&)> get;
   std::function<void(scenarios::Scenario&, double)> set;
 

@@ -198,6 +198,7 @@ std::string text_summary(const Calibration& c) {
   out << c.simulations << " simulations, " << c.starts << " start(s), " << c.iterations << " iterations, "
       << format_fixed(c.seconds, 1) << " s\n";
   if (!c.starts_note.empty()) out << "(" << c.starts_note << ")\n";
+  if (!c.scan_note.empty()) out << "(" << c.scan_note << ")\n";
   return out.str();
 }
 
@@ -262,6 +263,7 @@ nlohmann::json to_json(const Calibration& c) {
   j["simulations"] = c.simulations;
   j["starts"] = c.starts;
   j["starts_note"] = c.starts_note;
+  j["scan_note"] = c.scan_note;
   j["iterations"] = c.iterations;
   j["seconds"] = c.seconds;
   j["solver"] = c.solver_report;

@@ -223,6 +223,20 @@ TEST(ModelForms, APumpWithItsOwnLagIsTheChoiceThatPaysWhereTheReservoirFeedsTheG
   ASSERT_NE(t, nullptr);
   ASSERT_EQ(t->estimates.size(), 1u);
   EXPECT_NEAR(t->estimates.front().value, 1.4, 0.14);
+
+  // The choice added as the user adds it (--params +pump_lag_s): the calibration's own scan
+  // starts the lag off 0, where the cost does not lead towards the truth.
+  CalibrateOptions o;
+  o.replay = reservoir_replay();
+  o.parameters = {"+pump_lag_s"};
+  o.grid_refinements = 0;
+  const Calibration with_lag = calibrate(model(), record(truth, {"op1", "op2", "op3", "op4"}, 80.0, 11), {}, o);
+  ASSERT_TRUE(with_lag.ok) << with_lag.message;
+  EXPECT_NE(with_lag.scan_note.find("pump_lag_s started at"), std::string::npos) << with_lag.scan_note;
+  const auto lag = std::find_if(with_lag.parameters.begin(), with_lag.parameters.end(),
+                                [](const ParameterEstimate& p) { return p.name == "pump_lag_s"; });
+  ASSERT_NE(lag, with_lag.parameters.end());
+  EXPECT_NEAR(lag->value, 1.4, 0.14);
 }
 
 // A pump controller tuned otherwise than the scenario says (half its gain, twice its integral
