@@ -265,11 +265,13 @@ Run first_run(ReplayProblem& fit, TwiceTheCells& twice, const std::vector<double
 // The start z moved, for each parameter with a scan (Parameter::scan), to the value of its scan
 // or z's own that leaves the lowest cost, the parameters before it as moved and the others as
 // they start: one simulation per recording and value. Says in c.scan_note what it found.
-std::vector<double> start_at_the_scans(ReplayProblem& fit, std::vector<double> z, double cost_at_z, Calibration& c) {
+std::vector<double> start_at_the_scans(ReplayProblem& fit, std::vector<double> z, double cost_at_z, const ProgressCallback& progress,
+                                       Calibration& c) {
   const std::vector<Parameter>& parameters = fit.parameters();
   for (std::size_t j = 0; j < parameters.size(); ++j) {
     const Parameter& p = parameters[j];
     if (p.scan.empty()) continue;
+    if (progress) progress({0.0, "scanning " + p.name + " for a start"});
     double best_z = z[j];
     std::string tried = format_g(p.from_search(z[j]), 3);
     for (const double value : p.scan) {
@@ -411,7 +413,7 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     c.cost_before = cost_per_sample(fit.residuals(nominal));
     TwiceTheCells twice(fit);
     // A refined grid starts from the coarser grid's estimates, past any scan.
-    const std::vector<double> z_start = from_coarser ? z0 : start_at_the_scans(fit, z0, c.cost_before, c);
+    const std::vector<double> z_start = from_coarser ? z0 : start_at_the_scans(fit, z0, c.cost_before, o.progress, c);
     Run best = first_run(fit, twice, z_start, o, follows, from_coarser != nullptr, c);
     run_further_starts(fit, twice, z_start, o, follows, best, c);
     if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");

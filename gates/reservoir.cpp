@@ -82,7 +82,7 @@ void Reservoir::update_integral(double dt, double error, double unsaturated) {
   }
 }
 
-double Reservoir::pump_lagged_flow(double dt) {
+double Reservoir::advance_pump(double dt) {
   // The lag integrated exactly for the drive held over the step; without one the pump follows it.
   const double commanded = frequency_ * options_.flow_per_hz;
   if (options_.pump_lag == 0.0) {
@@ -108,7 +108,8 @@ double Reservoir::advance(double dt, double outflow) {
   saturated_ = frequency_ != unsaturated;
   update_integral(dt, error, unsaturated);
 
-  const double inflow_volume = pump_lagged_flow(dt);
+  // Exact balance for the outflow held over the step and the pump's flow as it moved.
+  const double inflow_volume = advance_pump(dt);
   const double outflow_volume = outflow * dt;
   volume_ += inflow_volume - outflow_volume;
   total_inflow_ += inflow_volume;

@@ -98,7 +98,7 @@ class Reservoir {
  private:
   void update_integral(double dt, double error, double unsaturated);
   // Moves the pump's flow dt seconds towards what the drive commands; returns the volume pumped.
-  double pump_lagged_flow(double dt);
+  double advance_pump(double dt);
 
   ReservoirOptions options_;
   double volume_ = 0.0;
