@@ -19,6 +19,7 @@
 #include "calibration/warning_once.hpp"
 #include "calibration/written_model.hpp"
 #include "calibration/problem.hpp"
+#include "calibration/starts.hpp"
 #include "calibration/statistics.hpp"
 #include "core/errors.hpp"
 #include "core/format.hpp"
@@ -129,29 +130,6 @@ std::string doubt(ReplayProblem& problem, TwiceTheCells& twice, const Run& run, 
   return "";
 }
 
-// Points spread over the middle half of the bounds (a Kronecker sequence in the search
-// coordinates), ordered by cost; the ones whose simulation fails are dropped.
-std::vector<Run> screened_starts(ReplayProblem& problem, int count) {
-  const auto& params = problem.parameters();
-  std::vector<Run> out;
-  for (int k = 1; k <= count; ++k) {
-    Run r;
-    for (std::size_t j = 0; j < params.size(); ++j) {
-      const double alpha = std::sqrt(static_cast<double>(2 + 3 * j)) - std::floor(std::sqrt(static_cast<double>(2 + 3 * j)));
-      const double f = std::fmod(0.5 + k * alpha, 1.0);
-      const double lo = params[j].to_search(params[j].low), hi = params[j].to_search(params[j].high);
-      r.z.push_back(lo + (hi - lo) * (0.25 + 0.5 * f));
-    }
-    try {
-      r.cost = cost_per_sample(problem.residuals(problem.predict(r.z)));
-      out.push_back(std::move(r));
-    } catch (const std::exception&) {
-    }
-  }
-  std::sort(out.begin(), out.end(), [](const Run& a, const Run& b) { return a.cost < b.cost; });
-  return out;
-}
-
 // Recordings of another canal: a `scenario` metadata line naming another canal, or levels the
 // canal's walls could not hold. One line per recording, naming it and the difference.
 std::vector<std::string> other_canal_problems(const Scenario& s, const std::vector<Recording>& recordings) {
@@ -260,36 +238,6 @@ Run first_run(ReplayProblem& fit, TwiceTheCells& twice, const std::vector<double
     if (finished.cost <= best.cost) best = std::move(finished);
   }
   return best;
-}
-
-// The start z moved, for each parameter with a scan (Parameter::scan), to the value of its scan
-// or z's own that leaves the lowest cost, the parameters before it as moved and the others as
-// they start: one simulation per recording and value. Says in c.scan_note what it found.
-std::vector<double> start_at_the_scans(ReplayProblem& fit, std::vector<double> z, double cost_at_z, const ProgressCallback& progress,
-                                       Calibration& c) {
-  const std::vector<Parameter>& parameters = fit.parameters();
-  for (std::size_t j = 0; j < parameters.size(); ++j) {
-    const Parameter& p = parameters[j];
-    if (p.scan.empty()) continue;
-    if (progress) progress({0.0, "scanning " + p.name + " for a start"});
-    double best_z = z[j];
-    std::string tried = format_g(p.from_search(z[j]), 3);
-    for (const double value : p.scan) {
-      if (value < p.low || value > p.high) continue;
-      std::vector<double> trial = z;
-      trial[j] = p.to_search(value);
-      const double cost = cost_per_sample(fit.residuals(fit.predict(trial)));
-      tried += ", " + format_g(value, 3);
-      if (cost < cost_at_z) {
-        cost_at_z = cost;
-        best_z = trial[j];
-      }
-    }
-    z[j] = best_z;
-    c.scan_note += (c.scan_note.empty() ? "" : "; ") + p.name + " started at " + format_g(p.from_search(best_z), 3) + " " + p.unit +
-                   ", the lowest cost of " + tried;
-  }
-  return z;
 }
 
 // The starts after the first (the best of points screened over the bounds): run when the first
@@ -413,7 +361,7 @@ Calibration calibrate_with(const Scenario& scenario, const std::vector<Recording
     c.cost_before = cost_per_sample(fit.residuals(nominal));
     TwiceTheCells twice(fit);
     // A refined grid starts from the coarser grid's estimates, past any scan.
-    const std::vector<double> z_start = from_coarser ? z0 : start_at_the_scans(fit, z0, c.cost_before, o.progress, c);
+    const std::vector<double> z_start = from_coarser ? z0 : start_at_the_scans(fit, z0, c.cost_before, o.progress, c.scan_note);
     Run best = first_run(fit, twice, z_start, o, follows, from_coarser != nullptr, c);
     run_further_starts(fit, twice, z_start, o, follows, best, c);
     if (!std::isfinite(best.cost)) throw std::runtime_error("no start converged to a usable solution");
