@@ -93,4 +93,19 @@ TEST(Simulate, AnOutputFileInAMissingDirectoryIsRefused) {
   fs::remove_all(scratch);
 }
 
+TEST(Simulate, TheSecondSimulatorWritesARecordingOfItsOwnAndRefusesACanalItDoesNotSimulate) {
+  const fs::path scratch = scratch_dir("simulate_staggered");
+  write_short_lab(scratch);
+  const RunResult r = run_canalsim("simulate short.toml -e b --scheme staggered --staggered-cells 50 -o b.csv", scratch);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string text = read_text(scratch / "b.csv");
+  EXPECT_NE(text.find("# generator: canalsim staggered simulator (Stelling & Duinmeijer 2003) on 50 cells"),
+            std::string::npos) << text.substr(0, 400);
+  EXPECT_NE(text.find("t_s,u_mm,x_up_mm,y_up_mm,y_dw_mm,y_dwe_mm,q_lps,regime"), std::string::npos);
+  // The ASCE canals have several pools: one line naming the key, and no file.
+  expect_refused_writing_nothing(scratch, "simulate asce1 -e steady --scheme staggered -o a.csv",
+                                 "the staggered simulator takes one pool", {"a.csv"});
+  fs::remove_all(scratch);
+}
+
 }  // namespace
