@@ -30,6 +30,7 @@ struct BlindtestArguments {
   bool verbose = false;
   bool realistic = false;
   int two_effect_trials = 10;
+  std::string truth_scheme = "finite-volume";
   std::string model;
   double quantum_mm = 0.05;
 };
@@ -64,6 +65,7 @@ void run(const BlindtestArguments& args) {
   if (args.realistic) {
     diagnosis::RealisticTruth realistic;
     realistic.two_effect_trials = args.two_effect_trials;
+    if (args.truth_scheme == "staggered") realistic.scheme = diagnosis::TruthScheme::staggered;
     options.realistic = realistic;
   }
   if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
@@ -147,6 +149,11 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--two-effect-trials", args->two_effect_trials,
                   "--realistic: trials with two concealed effects added to --trials (default 10)")
       ->check(integer_in(0, 100000, "a number of trials"));
+  cmd->add_option("--truth-scheme", args->truth_scheme,
+                  "--realistic: finite-volume (canalsim's scheme, 4x the cells, the other limiter) or staggered (the "
+                  "second simulator: another scheme and gate-law regularisation, one-pool canals; docs/numerics.md)")
+      ->check(CLI::IsMember({"finite-volume", "staggered"}))
+      ->capture_default_str();
   cmd->add_option("--model", args->model,
                   "Diagnose against this reduced model instead of the scenario (draws gate_rate_limit and "
                   "sensor_quantization unless --effects says otherwise)");
@@ -157,6 +164,7 @@ void add_blindtest_command(CLI::App& app) {
     if (cmd->count("--two-effect-trials") > 0 && !args->realistic) {
       throw InputError("blindtest --two-effect-trials: applies to --realistic");
     }
+    if (cmd->count("--truth-scheme") > 0 && !args->realistic) throw InputError("blindtest --truth-scheme: applies to --realistic");
     if (cmd->count("--quantum") > 0 && args->model.empty()) throw InputError("blindtest --quantum: applies to --model");
     run(*args);
   });

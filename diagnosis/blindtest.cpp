@@ -72,6 +72,7 @@ Status RealisticTruth::validate() const {
   check.require(numerics.cells_factor >= 1 && numerics.cells_factor <= 16, "numerics.cells_factor",
                 numerics.cells_factor, "1..16");
   check.require(numerics.cfl > 0.0 && numerics.cfl <= 1.0, "numerics.cfl", numerics.cfl, "(0, 1]");
+  check.require(staggered.cells >= 3 && staggered.cells <= 100000, "staggered.cells", staggered.cells, "3..100000");
   check.require(noise_low_mm >= 0.0 && noise_low_mm <= noise_high_mm, "noise_low_mm", noise_low_mm,
                 "[0, noise_high_mm]");
   check.require(two_effect_trials >= 0, "two_effect_trials", two_effect_trials, ">= 0");
@@ -341,8 +342,11 @@ std::string format_blindtest(const BlindtestResult& r, const BlindtestOptions& o
     << (o.realistic ? "" : ", level noise " + format_g(o.noise_std_mm) + " mm") << '\n';
   if (o.realistic) {
     const RealisticTruth& t = *o.realistic;
-    s << "truth: " << t.numerics.cells_factor << "x the cells, " << "the other limiter, Courant "
-      << format_g(t.numerics.cfl) << "; Cd ±" << format_g(100 * t.tolerances.discharge_coefficient) << " %, Manning n ±"
+    s << "truth: "
+      << (t.scheme == TruthScheme::staggered
+              ? "the second simulator (staggered scheme, " + std::to_string(t.staggered.cells) + " cells, its own gate-law regularisation)"
+              : std::to_string(t.numerics.cells_factor) + "x the cells, the other limiter, Courant " + format_g(t.numerics.cfl))
+      << "; Cd ±" << format_g(100 * t.tolerances.discharge_coefficient) << " %, Manning n ±"
       << format_g(100 * t.tolerances.manning_n) << " %, downstream opening ±" << format_g(t.tolerances.downstream_opening_mm)
       << " mm, tail level ±" << format_g(t.tolerances.tail_level_mm) << " mm, level offsets ±"
       << format_g(t.tolerances.level_offset_mm) << " mm, noise " << format_g(t.noise_low_mm) << "–"

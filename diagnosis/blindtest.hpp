@@ -13,7 +13,8 @@
 //
 // The realistic blind test (`blindtest --realistic`) does not let the diagnosis' own
 // model be the truth: each trial's canal is simulated differently (RealisticTruth::numerics: four
-// times the cells, the other limiter, another Courant number) with its uncertain physics drawn
+// times the cells, the other limiter, another Courant number; or with RealisticTruth::scheme the
+// second simulator, another scheme and gate-law regularisation, `--truth-scheme staggered`) with its uncertain physics drawn
 // within tolerances (Cd ±5 %, Manning n ±25 %, downstream opening and tail level ±1 mm, level
 // offsets ±0.5 mm) and a level noise of 0.03–0.1 mm; the recordings hold the command and the
 // levels only (no gate position, no flow). A clean baseline of the same truth — another PRBS
@@ -38,12 +39,20 @@
 #include "diagnosis/baseline.hpp"
 #include "scenarios/scenario.hpp"
 #include "scenarios/simulate.hpp"
+#include "scenarios/staggered.hpp"
 #include "scenarios/variation.hpp"
 
 namespace canalsim::diagnosis {
 
+enum class TruthScheme {
+  finite_volume,  // canalsim's own scheme with RealisticTruth::numerics
+  staggered,      // the second simulator (scenarios/staggered.hpp): another scheme and gate-law regularisation
+};
+
 struct RealisticTruth {
-  scenarios::TruthVariation numerics;
+  TruthScheme scheme = TruthScheme::finite_volume;
+  scenarios::TruthVariation numerics;        // the finite-volume truth's grid, limiter, Courant number
+  scenarios::StaggeredOptions staggered;     // the second simulator's
   scenarios::UncertainTolerances tolerances;
   double noise_low_mm = 0.03, noise_high_mm = 0.1;  // level noise, drawn per trial
   int two_effect_trials = 10;                        // added to `trials`; >= 0
@@ -177,10 +186,11 @@ Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& 
 
 // One experiment of `scenario` with the concealed effects, as logged: simulated with ideal level
 // sensors (the scenario's own delay and offsets kept) and the hydraulic effects, then written by
-// a Logger with the experiment's sensor noise, resolution and seed.
+// a Logger with the experiment's sensor noise, resolution and seed. `simulator`: simulate()
+// unless given.
 Recording simulate_concealed(const scenarios::Scenario& scenario, scenarios::ExperimentSpec experiment,
                              const std::vector<ConcealedEffect>& concealed, double inflow_m3s,
-                             const scenarios::SimulateOptions& options = {});
+                             const scenarios::SimulateOptions& options = {}, const scenarios::Simulator& simulator = {});
 
 // Relative error of an estimate: |est − true| / |true − no effect| (|est − true| / |true| when
 // "no effect" is infinite: the ideal actuator's speed).

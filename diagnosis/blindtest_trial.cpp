@@ -40,6 +40,13 @@ Recording levels_only(const Recording& r) {
   return out;
 }
 
+// What simulates a realistic truth: the second simulator when it is chosen, else simulate().
+scenarios::Simulator truth_simulator(const TrialContext& c) {
+  const auto& realistic = c.options.realistic;
+  if (realistic && realistic->scheme == TruthScheme::staggered) return scenarios::staggered_simulator(realistic->staggered);
+  return {};
+}
+
 // Every experiment simulated on `truth` with the concealed effects.
 std::vector<Recording> record(const TrialContext& c, const Scenario& truth, const std::vector<ConcealedEffect>& concealed,
                               const RecordingPlan& plan) {
@@ -56,7 +63,7 @@ std::vector<Recording> record(const TrialContext& c, const Scenario& truth, cons
     // concern, so not a warning.
     scenarios::SimulateOptions so;
     so.warning = [](const std::string&) {};
-    Recording r = simulate_concealed(truth, e, concealed, c.inflow_m3s[k], so);
+    Recording r = simulate_concealed(truth, e, concealed, c.inflow_m3s[k], so, truth_simulator(c));
     r.source = plan.label + "/" + e.name;
     out.push_back(plan.levels_only ? levels_only(r) : std::move(r));
   }

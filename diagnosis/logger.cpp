@@ -113,7 +113,7 @@ Recording as_logged(const Recording& ideal, const std::vector<ConcealedEffect>& 
 
 Recording simulate_concealed(const scenarios::Scenario& scenario, scenarios::ExperimentSpec e,
                              const std::vector<ConcealedEffect>& concealed, double inflow_m3s,
-                             const scenarios::SimulateOptions& options) {
+                             const scenarios::SimulateOptions& options, const scenarios::Simulator& simulator) {
   scenarios::Scenario s = scenario;
   scenarios::SensorSpec sensors = e.sensors.value_or(s.sensors);
   const Logger logger{sensors.noise_std_mm, sensors.resolution_mm, sensors.seed};
@@ -125,8 +125,9 @@ Recording simulate_concealed(const scenarios::Scenario& scenario, scenarios::Exp
     conceal(effect, s, inflow_m3s);
     if (effect.effect == "gate_backlash") backlash_mm = effect.value;
   }
-  const Recording ideal = backlash_mm > 0.0 ? scenarios::simulate_with_backlash(s, e, backlash_mm, options)
-                                            : scenarios::simulate(s, e, options);
+  const Recording ideal = backlash_mm > 0.0 ? scenarios::simulate_with_backlash(s, e, backlash_mm, options, simulator)
+                        : simulator        ? simulator(s, e, options)
+                                           : scenarios::simulate(s, e, options);
   return as_logged(ideal, concealed, logger);
 }
 

@@ -34,6 +34,7 @@
 #include "scenarios/builtin.hpp"
 #include "scenarios/scenario_toml.hpp"
 #include "scenarios/simulate.hpp"
+#include "scenarios/staggered.hpp"
 
 namespace py = pybind11;
 
@@ -180,9 +181,17 @@ std::string scenario_with(const std::string& text, const std::string& source, co
 // Simulation and the linearised pool
 
 py::dict simulate(const std::string& text, const std::string& source, const std::string& experiment, bool allow_long,
-                  const py::object& progress) {
+                  const std::string& scheme, const py::object& progress) {
   const scenarios::Scenario s = parse(text, source);
   const scenarios::ExperimentSpec& e = experiment_of(s, experiment);
+  if (scheme != "finite-volume" && scheme != "staggered") {
+    throw InputError("scheme: expected \"finite-volume\" or \"staggered\", got \"" + scheme + "\"");
+  }
+  if (scheme == "staggered") {
+    py::dict d = recording_dict(scenarios::simulate_staggered(s, e));
+    d["warnings"] = std::vector<std::string>{};
+    return d;
+  }
   LongCall call(progress);
   scenarios::SimulateOptions options;
   options.allow_long_run = allow_long;

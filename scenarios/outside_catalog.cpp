@@ -185,7 +185,7 @@ Recording backlash_drive(const Scenario& s, const ExperimentSpec& e, double back
 }
 
 Recording simulate_with_backlash(const Scenario& s, const ExperimentSpec& e, double backlash_mm,
-                                 const SimulateOptions& options) {
+                                 const SimulateOptions& options, const Simulator& simulator) {
   if (options.drive.use_recorded_upstream || s.upstream.kind == UpstreamKind::recorded) {
     throw InputError(s.source + ": experiment " + e.name + ": a gate backlash drives the gate with a recording of " +
                      "its own; it cannot also replay the upstream level (upstream.kind = \"recorded\")");
@@ -194,7 +194,7 @@ Recording simulate_with_backlash(const Scenario& s, const ExperimentSpec& e, dou
   const SignalPtr command = command_input(e, options.drive);
   SimulateOptions run = options;
   run.drive.recording = &drive;
-  Recording rec = simulate(s, e, run);
+  Recording rec = simulator ? simulator(s, e, run) : simulate(s, e, run);
   // What the logger records: the command, clamped to the gate's range as simulate() records it.
   const double max_opening = controlled_gate(s, e).max_opening_m;
   std::vector<double> u;

@@ -60,8 +60,9 @@ Recording backlash_drive(const Scenario& scenario, const ExperimentSpec& experim
 // would write it: only x_up_mm (the gate's position) and the hydraulics show the play. Nothing in
 // the recording names the backlash. Throws InputError for an upstream that replays recorded levels
 // (the drive recording replaces the replayed one), besides what backlash_drive and simulate throw.
+// `simulator`: simulate() unless given (the second simulator's truths, blindtest.hpp).
 Recording simulate_with_backlash(const Scenario& scenario, const ExperimentSpec& experiment, double backlash_mm,
-                                 const SimulateOptions& options = {});
+                                 const SimulateOptions& options = {}, const Simulator& simulator = {});
 
 struct DepthSeepageOptions {
   int pool = 0;              // 0-based pool that leaks

@@ -122,4 +122,8 @@ solver::SteadyStateOptions initial_steady_state_options(const Scenario& scenario
 Recording simulate(const Scenario& scenario, const ExperimentSpec& experiment,
                    const SimulateOptions& options = {});
 
+// Something that runs an experiment as simulate() does: simulate() itself, or the second
+// simulator (staggered.hpp staggered_simulator), for truths of another scheme.
+using Simulator = std::function<Recording(const Scenario&, const ExperimentSpec&, const SimulateOptions&)>;
+
 }  // namespace canalsim::scenarios

@@ -449,4 +449,12 @@ Recording simulate_staggered(const Scenario& s, const ExperimentSpec& e, const S
   return rec;
 }
 
+Simulator staggered_simulator(const StaggeredOptions& options) {
+  return [options](const Scenario& s, const ExperimentSpec& e, const SimulateOptions& run) {
+    StaggeredOptions o = options;
+    o.drive = run.drive;
+    return simulate_staggered(s, e, o);
+  };
+}
+
 }  // namespace canalsim::scenarios

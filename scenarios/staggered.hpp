@@ -52,4 +52,8 @@ struct StaggeredOptions {
 Recording simulate_staggered(const Scenario& scenario, const ExperimentSpec& experiment,
                              const StaggeredOptions& options = {});
 
+// The second simulator as a Simulator (simulate.hpp): the drive taken from the SimulateOptions,
+// everything else from `options`.
+Simulator staggered_simulator(const StaggeredOptions& options = {});
+
 }  // namespace canalsim::scenarios

@@ -105,15 +105,17 @@ def _scenario(s: ScenarioLike) -> Scenario:
 
 
 def simulate(scenario: ScenarioLike, experiment: str, *, allow_long: bool = False,
-             progress: Progress = None) -> pd.DataFrame:
+             scheme: str = "finite-volume", progress: Progress = None) -> pd.DataFrame:
     """Runs one experiment of a scenario and returns its recording (``canalsim simulate``).
 
     Columns t_s, u_mm, x_up_mm, y_up_mm, y_dw_mm, y_dwe_mm, q_lps, regime; the metadata
     (scenario, experiment, sensors, operating point, ...) in ``df.attrs``. A run past the cost
-    ceilings (docs/scenarios.md, "Run cost") is refused unless ``allow_long``.
+    ceilings (docs/scenarios.md, "Run cost") is refused unless ``allow_long``. ``scheme="staggered"``
+    runs it on the second simulator, written apart from the model (``--scheme staggered``,
+    docs/numerics.md §9): a truth of another scheme to test fits, calibrations and diagnoses against.
     """
     text, source = _scenario_text(scenario)
-    result = _canalsim.simulate(text, source, experiment, allow_long, progress)
+    result = _canalsim.simulate(text, source, experiment, allow_long, scheme, progress)
     for warning in result["warnings"]:
         import warnings
         warnings.warn(warning, RuntimeWarning, stacklevel=2)

@@ -87,6 +87,35 @@ TEST(Blindtest, OnlyHydraulicEffectsAreConcealedInTheScenario) {
   EXPECT_NEAR(s.head_gate->leakage_m, 0.002, 1e-15);
 }
 
+// The realistic test's second simulator (`--truth-scheme staggered`) carries every way an
+// effect is concealed: the scenario edited (an outflow along the pool), the drive (a gate behind
+// a backlash) and the logger (an offset of one sensor).
+TEST(Blindtest, ConcealedEffectsReachTheSecondSimulator) {
+  const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
+  scenarios::ExperimentSpec e = *lab.find_experiment("op2");
+  e.duration_s = 40.0;
+  const scenarios::Simulator staggered = scenarios::staggered_simulator();
+  const double inflow_m3s = 1.0e-3;
+  const auto run = [&](const std::vector<ConcealedEffect>& concealed) {
+    return simulate_concealed(lab, e, concealed, inflow_m3s, {}, staggered);
+  };
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  };
+  const Recording clean = run({});
+  EXPECT_NE(clean.meta("generator").find("staggered"), std::string::npos);
+  const Recording outflow = run({{"lateral_outflow", 0.2}});  // 0.2 L/s drawn at mid-pool
+  EXPECT_LT(mean(outflow.column("y_dwe_mm")), mean(clean.column("y_dwe_mm")) - 1.0);
+  const Recording backlash = run({{"gate_backlash", 3.0}});
+  EXPECT_EQ(backlash.column("u_mm"), clean.column("u_mm"));  // the logger records the command ...
+  EXPECT_NE(backlash.column("x_up_mm"), clean.column("x_up_mm"));  // ... not what the gate did
+  const Recording offset = run({{"sensor_offset[y_dwe_mm]", 1.5}});
+  EXPECT_NEAR(mean(offset.column("y_dwe_mm")) - mean(clean.column("y_dwe_mm")), 1.5, 0.03);
+  EXPECT_EQ(offset.column("y_dw_mm"), clean.column("y_dw_mm"));
+}
+
 TEST(Blindtest, ATwinCountsOnlyWithoutAGatePosition) {
   EXPECT_TRUE(names_effect("gate_leakage", "command_offset", false));
   EXPECT_FALSE(names_effect("gate_leakage", "command_offset", true));
