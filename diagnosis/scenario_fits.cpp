@@ -186,6 +186,11 @@ double Engine::lattice_resolution(const std::vector<std::string>& channels) cons
   const double largest = kind_named("sensor_quantization")->theta_high;
   for (double r = largest; r > sensors_.resolution_mm * 1.5; r -= 0.005) {
     if (lattice_coherence(series, r, 6.0) <= 0.9) continue;
+    // A quantised channel's levels sit on its lattice exactly (to the digits a recording prints:
+    // coherence above 0.98 down to a 0.1 mm step). Levels that dwell on a few values — a PRBS's
+    // two, m steps apart — nearly sit on any lattice dividing their difference, which the scan's
+    // loose test passes but its refinement does not bring near 1: the scan goes on below it.
+    if (lattice_coherence(series, refine_lattice(series, r), 6.0) < 0.97) continue;
     // A lattice holds its submultiples too: a channel that moves by fewer than six steps of its
     // own lattice (an upstream level that hardly moves) is first seen on r/2 or r/3. The lattice is
     // the largest multiple of r the levels still sit on, over at least two of its steps.

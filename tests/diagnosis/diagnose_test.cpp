@@ -105,6 +105,34 @@ TEST(Diagnose, ACoarseSensorOnALevelThatHardlyMovesIsNamedWithItsOwnStep) {
   ASSERT_NE(e, nullptr);
   EXPECT_NEAR(e->parameter.value, 0.6, 0.006);
 }
+// A level that dwells on two values seven steps of its sensor's 0.6 mm lattice apart, passing the
+// steps between them one sample each when it moves (4 % of the samples): the two values also sit
+// on a 0.7 mm lattice, six of its steps apart, which the scan's loose test passes (coherence up to
+// 0.95 on its grid). Refined, that lattice holds the levels at 0.88 only, and the search goes on
+// to the sensor's own step (taking the first to be the sensor's gave 1.80 mm).
+TEST(Diagnose, ALevelDwellingOnTwoValuesIsReadOnItsSensorsLatticeNotOnOneThatHoldsTheTwo) {
+  const std::string effect = "sensor_quantization[y_dw_mm]";
+  const double step = 0.6, origin = 47.1;
+  std::vector<Recording> recordings = simulate_lab({"none", 0.0});
+  for (Recording& r : recordings) {
+    std::vector<double>& y_dw = r.column("y_dw_mm");
+    std::vector<int> k(y_dw.size(), 0);
+    const std::size_t dwell = 154;  // 20 s
+    for (std::size_t i = 0; i < k.size(); ++i) {
+      const std::size_t phase = i % (2 * dwell), into = phase % dwell;
+      const bool high = phase >= dwell;
+      k[i] = high ? (into < 6 ? static_cast<int>(into) + 1 : 7)       // rising through 1..6 to 7
+                  : (into < 6 ? 6 - static_cast<int>(into) : 0);      // falling through 6..1 to 0
+      if (!high && into == 6 && i > dwell) k[i] = -1;                 // and undershooting once
+    }
+    for (std::size_t i = 0; i < y_dw.size(); ++i) y_dw[i] = origin + step * k[i];
+  }
+  const Diagnosis d = diagnose(scenarios::builtin_scenario("lab"), recordings, fast_options({effect}));
+  ASSERT_TRUE(d.ok) << d.message;
+  const EffectResult* e = find(d, effect);
+  ASSERT_NE(e, nullptr);
+  EXPECT_NEAR(e->parameter.value, step, 0.006) << d.reason;
+}
 TEST(Diagnose, RecoversGateRateLimit) { expect_recovered({"gate_rate_limit", 8.0, {"command_delay"}}); }
 TEST(Diagnose, RecoversGateLeakage) { expect_recovered({"gate_leakage", 2.0, {"discharge_coefficient"}}); }
 TEST(Diagnose, RecoversDischargeCoefficient) { expect_recovered({"discharge_coefficient", 0.85, {"gate_leakage"}}); }
