@@ -11,8 +11,8 @@
 namespace canalsim::calibration {
 namespace {
 
-// The axes' edges (header comment).
-constexpr double kSlowWindowS = 20.0, kFastWindowS = 2.0;
+// The slow band's edge (header comment; the fast band's is fast_band_edge_s).
+constexpr double kSlowWindowS = 20.0;
 
 bool is_level(const Series& s) { return s.channel.rfind("y_", 0) == 0; }
 
@@ -34,15 +34,17 @@ std::vector<double> moving_average(const std::vector<double>& x, std::size_t win
   return out;
 }
 
-std::size_t samples_in(double seconds, const Series& s) {
-  const double period = s.t.size() > 1 ? s.t[1] - s.t[0] : 1.0;
-  return 2 * static_cast<std::size_t>(std::max(0.0, std::round(0.5 * seconds / period))) + 1;
+// The odd number of samples spanning `seconds`.
+std::size_t samples_in(double seconds, double period_s) {
+  return 2 * static_cast<std::size_t>(std::max(0.0, std::round(0.5 * seconds / period_s))) + 1;
 }
+
+double period_of(const Series& s) { return s.t.size() > 1 ? s.t[1] - s.t[0] : 1.0; }
 
 // The filter bank's three parts of a residual: slow, mid, fast.
 std::vector<std::vector<double>> frequency_parts(const std::vector<double>& r, const Series& s) {
-  const std::vector<double> slow = moving_average(r, samples_in(kSlowWindowS, s));
-  const std::vector<double> smooth = moving_average(r, samples_in(kFastWindowS, s));
+  const std::vector<double> slow = moving_average(r, samples_in(kSlowWindowS, period_of(s)));
+  const std::vector<double> smooth = slower_than_fast_band(r, period_of(s));
   std::vector<double> mid(r.size()), fast(r.size());
   for (std::size_t k = 0; k < r.size(); ++k) {
     mid[k] = smooth[k] - slow[k];
@@ -213,6 +215,10 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
     return rank(a.name) < rank(b.name);
   });
   return out;
+}
+
+std::vector<double> slower_than_fast_band(const std::vector<double>& residual, double period_s) {
+  return moving_average(residual, samples_in(fast_band_edge_s, period_s));
 }
 
 }  // namespace canalsim::calibration

@@ -55,4 +55,11 @@ struct ChoiceSeries {
 // model's (another recording, channel or length) gets NaN shares.
 ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const std::vector<ChoiceSeries>& choices = {});
 
+// The edge between the filter bank's fast band and the slower ones [s], and the part of a
+// residual sampled every `period_s` slower than it: slow + mid = MA_2s(r). A model's error from
+// how its scheme resolves bores lives in the fast band; a change of the canal the model lacks
+// (a gate's play, a leak) moves the levels over the command's slower swings as well.
+constexpr double fast_band_edge_s = 2.0;
+std::vector<double> slower_than_fast_band(const std::vector<double>& residual, double period_s);
+
 }  // namespace canalsim::calibration

@@ -94,7 +94,8 @@ std::string named_values(const std::map<std::string, double>& values) {
 
 std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations,
                                    double baseline_rms_mm, const std::map<std::string, double>& deviations_alone,
-                                   const std::map<std::string, double>& baseline_rms_by_channel) {
+                                   const std::map<std::string, double>& baseline_rms_by_channel,
+                                   const std::map<std::string, double>& baseline_slow_rms_by_channel) {
   std::string out;
   std::map<std::string, int> counts;
   bool skipping = false;
@@ -112,6 +113,10 @@ std::string with_calibration_table(const std::string& text, const std::map<std::
   if (!baseline_rms_by_channel.empty()) {
     out += "\n[calibration.baseline_rms]  # the same residual RMS for each level channel [mm]\n" +
            named_values(baseline_rms_by_channel);
+  }
+  if (!baseline_slow_rms_by_channel.empty()) {
+    out += "\n[calibration.baseline_slow_rms]  # its part slower than 2 s (periods the bores' smearing does not reach) [mm]\n" +
+           named_values(baseline_slow_rms_by_channel);
   }
   out += "\n[calibration.std]  # one statistical standard deviation of each calibrated parameter (canalsim calibrate);\n"
          "                   # canalsim diagnose reads it: an effect must exceed what calibration left open\n" +

@@ -30,11 +30,13 @@ std::string edit_scenario_toml(const std::string& text, const std::vector<KeyEdi
 // first, so a calibrated file calibrated again carries only the new figures. Non-finite
 // deviations (not determined by the data) are left out.
 // `baseline_rms_mm` (the primary residual left on the baseline) goes into [calibration] before it,
-// the same per level channel into [calibration.baseline_rms], and each parameter's deviation with
-// the others held at their estimates into [calibration.std_alone] after it.
+// the same per level channel into [calibration.baseline_rms], its part slower than the fast band
+// into [calibration.baseline_slow_rms], and each parameter's deviation with the others held at
+// their estimates into [calibration.std_alone] after it.
 std::string with_calibration_table(const std::string& text, const std::map<std::string, double>& deviations,
                                    double baseline_rms_mm = 0.0,
                                    const std::map<std::string, double>& deviations_alone = {},
-                                   const std::map<std::string, double>& baseline_rms_by_channel = {});
+                                   const std::map<std::string, double>& baseline_rms_by_channel = {},
+                                   const std::map<std::string, double>& baseline_slow_rms_by_channel = {});
 
 }  // namespace canalsim::calibration

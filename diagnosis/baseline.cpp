@@ -7,6 +7,7 @@
 
 #include "calibration/observe.hpp"
 #include "calibration/parameters.hpp"
+#include "calibration/residual_breakdown.hpp"
 #include "core/json.hpp"
 #include "core/declared_units.hpp"
 #include "core/errors.hpp"
@@ -130,6 +131,20 @@ std::map<std::string, double> baseline_rms_by_channel(const calibration::Calibra
   return out;
 }
 
+std::map<std::string, double> baseline_slow_rms_by_channel(const calibration::Calibration& c) {
+  std::map<std::string, std::pair<double, std::size_t>> sums;
+  for (const auto& s : c.series) {
+    if (s.validation || !calibration::is_level(s.channel) || s.t.size() < 2 || s.calibrated.size() != s.recorded.size()) continue;
+    std::vector<double> r(s.recorded.size());
+    for (std::size_t k = 0; k < r.size(); ++k) r[k] = s.recorded[k] - s.calibrated[k];
+    for (double v : calibration::slower_than_fast_band(r, s.t[1] - s.t[0])) sums[s.channel].first += v * v;
+    sums[s.channel].second += r.size();
+  }
+  std::map<std::string, double> out;
+  for (const auto& [channel, s] : sums) out[channel] = std::sqrt(s.first / static_cast<double>(s.second));
+  return out;
+}
+
 double baseline_rms_of(const calibration::Calibration& c, const std::string& primary) {
   double sq = 0.0;
   int n = 0;
@@ -249,6 +264,7 @@ BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, co
   BaselineDiagnosis out;
   for (const Recording& b : baseline) out.baseline.push_back(name_of(b));
   out.calibration = calibration::calibrate(scenario, baseline, {}, calibration_options(o));
+  const std::map<std::string, double> slow_rms = baseline_slow_rms_by_channel(out.calibration);
   out.calibration.series.clear();  // plots of the baseline belong to `canalsim calibrate --report`
   if (!out.calibration.ok) {
     out.diagnosis.ok = false;
@@ -259,6 +275,7 @@ BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, co
   d.calibrated_std = calibrated_std_alone_of(out.calibration);
   d.baseline_rms_mm = baseline_rms_of(out.calibration, d.primary);
   d.baseline_rms_by_channel = baseline_rms_by_channel(out.calibration);
+  d.baseline_slow_rms_by_channel = slow_rms;
   d.progress = nullptr;
   if (o.progress) {
     d.progress = [&o](const ProgressReport& r) {

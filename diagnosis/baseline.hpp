@@ -84,6 +84,10 @@ std::map<std::string, double> calibrated_std_alone_of(const calibration::Calibra
 double baseline_rms_of(const calibration::Calibration& calibration, const std::string& primary);
 // The same for every level channel it fitted (DiagnoseOptions::baseline_rms_by_channel).
 std::map<std::string, double> baseline_rms_by_channel(const calibration::Calibration& calibration);
+// The RMS of that residual's part slower than the fast band (calibration::slower_than_fast_band),
+// per level channel (DiagnoseOptions::baseline_slow_rms_by_channel): from the calibration's
+// series, so empty once they are cleared.
+std::map<std::string, double> baseline_slow_rms_by_channel(const calibration::Calibration& calibration);
 
 // The calibrated standard deviations a scenario file carries, written by `canalsim calibrate`:
 // [calibration.std_alone] when it has one, else [calibration.std]; each name checked against the

@@ -58,8 +58,9 @@ std::string calibrated_scenario_toml(const std::string& text, const calibration:
   }
   if (!c.gate_laws.empty()) {  // the laws compared, as the calibrated scenario carries them
     for (const auto& [key, law] : gate_law_keys(c.calibrated)) {
-      edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")",
-                       "\"" + std::string(scenarios::to_string(law)) + "\""});
+      std::string quoted_law = "\"";
+      quoted_law.append(scenarios::to_string(law)).push_back('"');
+      edits.push_back({key, 0.0, "calibrated: the gate law that fits best (" + compared_laws(c) + ")", quoted_law});
     }
   }
   for (std::size_t i = 0; (c.grids.size() > 1 || c.written_grid_converged) && i < c.calibrated.pools.size(); ++i) {
@@ -80,7 +81,7 @@ std::string calibrated_scenario_toml(const std::string& text, const calibration:
                     calibration::with_calibration_table(calibration::edit_scenario_toml(text, edits), deviations,
                                                         baseline_rms_of(c, columns::level_downstream_end),
                                                         calibrated_std_alone_of(c),
-                                                        baseline_rms_by_channel(c));
+                                                        baseline_rms_by_channel(c), baseline_slow_rms_by_channel(c));
   const scenarios::Scenario back = scenarios::parse_scenario(out, source.destination);
   for (std::size_t j = 0; j < c.parameters.size(); ++j) {
     const auto catalog = calibration::select_parameters(back, {c.parameters[j].name + ":" + format_g(c.parameters[j].low, 17) +

@@ -561,6 +561,9 @@ Status DiagnoseOptions::validate() const {
   for (const auto& [channel, rms] : baseline_rms_by_channel) {
     check.require(rms >= 0.0 && std::isfinite(rms), "baseline_rms_by_channel." + channel, rms, ">= 0");
   }
+  for (const auto& [channel, rms] : baseline_slow_rms_by_channel) {
+    check.require(rms >= 0.0 && std::isfinite(rms), "baseline_slow_rms_by_channel." + channel, rms, ">= 0");
+  }
   check.require(baseline_factor > 0.0, "baseline_factor", baseline_factor, "> 0");
   for (const auto& [name, sd] : calibrated_std) {
     check.require(sd >= 0.0, "calibrated_std." + name, sd, ">= 0 (a standard deviation)");
@@ -627,6 +630,9 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
   if (options.calibrated_std.empty()) options.calibrated_std = calibrated_std_of(scenario);
   if (options.baseline_rms_mm == 0.0) options.baseline_rms_mm = scenario.calibrated_baseline_rms_mm;
   if (options.baseline_rms_by_channel.empty()) options.baseline_rms_by_channel = scenario.calibrated_baseline_rms_by_channel;
+  if (options.baseline_slow_rms_by_channel.empty()) {
+    options.baseline_slow_rms_by_channel = scenario.calibrated_baseline_slow_rms_by_channel;
+  }
   std::vector<Recording> recordings;
   for (const Recording& r : recordings_as_recorded) recordings.push_back(in_millimetres(r));
   const std::vector<std::string> problems = check_recordings(scenario, recordings);
@@ -643,6 +649,9 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
   settings.tolerated_rms = options.baseline_factor * options.baseline_rms_mm;
   for (const auto& [channel, rms] : options.baseline_rms_by_channel) {
     settings.tolerated_by_channel[channel] = options.baseline_factor * rms;
+  }
+  for (const auto& [channel, rms] : options.baseline_slow_rms_by_channel) {
+    settings.tolerated_slow_by_channel[channel] = options.baseline_factor * rms;
   }
   settings.tests = options.tests;
   settings.locate = options.locate;

@@ -89,6 +89,11 @@ struct DiagnoseOptions {
   double baseline_rms_mm = 0.0;  // >= 0
   // The same for each level channel (0 or missing: baseline_rms_mm stands for it).
   std::map<std::string, double> baseline_rms_by_channel;
+  // The part of each level channel's baseline residual slower than 2 s
+  // (calibration::slower_than_fast_band; missing: that channel's residual is judged in total
+  // only). A model's error from resolving bores is fast; an effect as large as it in total can
+  // still stand far beyond it in the slower part, where the model's error is a few times smaller.
+  std::map<std::string, double> baseline_slow_rms_by_channel;
   // √2: the RMS of the model's own error b and an effect as large as it, uncorrelated,
   // sqrt(b² + b²). A residual below it leaves room only for an effect smaller than the model's
   // error on clean recordings, which these recordings cannot tell from that error; beyond it an

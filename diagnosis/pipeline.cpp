@@ -9,6 +9,7 @@
 #include <numeric>
 #include <optional>
 
+#include "calibration/residual_breakdown.hpp"
 #include "core/errors.hpp"
 #include "diagnosis/catalog.hpp"
 #include "core/format.hpp"
@@ -123,6 +124,8 @@ std::string furthest_channel(const Diagnosis& d, double none_noise_factor) {
   std::string out = d.channels.empty() ? "" : d.channels.front().name;
   double worst = 0.0;
   for (const auto& c : d.channels) {
+    // In total: a channel beyond its tolerance only in the slower part, where the model's error
+    // is small, would otherwise outrank the channel the residual is largest on.
     const double excess = c.rms / std::max({none_noise_factor * c.noise, c.tolerated, 1e-12});
     if (!c.ordinary && excess > worst) {
       worst = excess;
@@ -348,10 +351,18 @@ namespace {
 
 // One level channel's figures over every recording: its noise (each recording's estimate from the
 // recorded series, pooled in quadrature) and the nominal residual RMS.
-ChannelFigures channel_figures(const std::vector<RecordingResiduals>& sets, const std::string& channel, double resolution) {
-  ChannelFigures f;
+// The channel's noise, its residual's RMS in total and in the part slower than the fast band, and
+// what the noise leaves of that part: white noise averaged over the band's window of samples.
+struct ChannelMeasures {
+  ChannelFigures figures;
+  double slow_noise = 0.0;
+};
+
+ChannelMeasures channel_measures(const std::vector<RecordingResiduals>& sets, const std::string& channel, double resolution) {
+  ChannelMeasures m;
+  ChannelFigures& f = m.figures;
   f.name = channel;
-  double noise_sq = 0.0, rms_sq = 0.0;
+  double noise_sq = 0.0, slow_noise_sq = 0.0, rms_sq = 0.0, slow_sq = 0.0;
   std::size_t n = 0, recordings = 0;
   for (const auto& r : sets) {
     const auto e = r.residuals.find(channel);
@@ -360,21 +371,29 @@ ChannelFigures channel_figures(const std::vector<RecordingResiduals>& sets, cons
     const std::vector<double>& recorded = y != r.recorded.end() ? y->second : r.level;
     const double sigma = noise_level(recorded, resolution);
     noise_sq += sigma * sigma;
+    slow_noise_sq += sigma * sigma * r.period_s / calibration::fast_band_edge_s;
     ++recordings;
     rms_sq += std::inner_product(e->second.begin(), e->second.end(), e->second.begin(), 0.0);
+    for (double v : calibration::slower_than_fast_band(e->second, r.period_s)) slow_sq += v * v;
     n += e->second.size();
   }
-  f.noise = std::sqrt(noise_sq / static_cast<double>(std::max<std::size_t>(recordings, 1)));
-  f.rms = std::sqrt(rms_sq / static_cast<double>(std::max<std::size_t>(n, 1)));
-  return f;
+  const auto per_recording = static_cast<double>(std::max<std::size_t>(recordings, 1));
+  const auto per_sample = static_cast<double>(std::max<std::size_t>(n, 1));
+  f.noise = std::sqrt(noise_sq / per_recording);
+  f.rms = std::sqrt(rms_sq / per_sample);
+  f.slow_rms = std::sqrt(slow_sq / per_sample);
+  m.slow_noise = std::sqrt(slow_noise_sq / per_recording);
+  return m;
 }
 
 std::string mm(double v) { return format_fixed(v, 3) + " mm"; }
 
 // "y_up_mm RMS 2.03 mm (noise 0.05 mm, tolerated 0.54 mm)"
 std::string describe(const ChannelFigures& c) {
+  const bool slow_beyond = c.slow_tolerated > 0.0 && c.slow_rms > c.slow_tolerated && c.rms <= c.tolerated;
   return c.name + " RMS " + mm(c.rms) + " (noise " + mm(c.noise) +
-         (c.tolerated > 0.0 ? ", tolerated " + mm(c.tolerated) : std::string()) + ")";
+         (c.tolerated > 0.0 ? ", tolerated " + mm(c.tolerated) : std::string()) +
+         (slow_beyond ? "; slower than 2 s " + mm(c.slow_rms) + ", tolerated " + mm(c.slow_tolerated) : std::string()) + ")";
 }
 
 }  // namespace
@@ -431,10 +450,17 @@ void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resol
   }
   d.channels.clear();
   for (const auto& name : names) {
-    ChannelFigures f = channel_figures(sets, name, resolution);
+    const ChannelMeasures m = channel_measures(sets, name, resolution);
+    ChannelFigures f = m.figures;
     const auto own = settings.tolerated_by_channel.find(name);
     f.tolerated = own != settings.tolerated_by_channel.end() ? own->second : settings.tolerated_rms;
-    f.ordinary = f.rms <= settings.none_noise_factor * f.noise || (f.tolerated > 0.0 && f.rms <= f.tolerated);
+    const auto slow = settings.tolerated_slow_by_channel.find(name);
+    if (slow != settings.tolerated_slow_by_channel.end()) {
+      f.slow_tolerated = std::max(slow->second, settings.none_noise_factor * m.slow_noise);
+    }
+    const bool within_model_error =
+        f.tolerated > 0.0 && f.rms <= f.tolerated && (f.slow_tolerated == 0.0 || f.slow_rms <= f.slow_tolerated);
+    f.ordinary = f.rms <= settings.none_noise_factor * f.noise || within_model_error;
     d.channels.push_back(std::move(f));
   }
 }

@@ -99,7 +99,13 @@ struct ChannelFigures {
   double noise = 0.0;       // estimated from the recorded channel itself [mm]
   double rms = 0.0;         // nominal residual RMS [mm]
   double tolerated = 0.0;   // what the calibration leaves on its baseline, times the factor [mm]; 0 = none
-  // rms ≤ none_noise_factor × noise or ≤ tolerated
+  // The residual's part slower than the fast band (calibration::slower_than_fast_band) [mm], and
+  // what the calibration leaves of that part on its baseline, times the factor (0 = not known),
+  // but at least none_noise_factor × what the noise leaves of it, noise / sqrt(samples averaged).
+  double slow_rms = 0.0, slow_tolerated = 0.0;
+  // rms ≤ none_noise_factor × noise, or rms ≤ tolerated with slow_rms ≤ slow_tolerated (when
+  // known): within the model's own error in total and in the slower part, where a bore's
+  // smearing does not reach
   bool ordinary = true;
 };
 
@@ -219,6 +225,9 @@ struct PipelineSettings {
   double tolerated_rms = 0.0;
   // The same for other level channels, by name; a channel without one takes tolerated_rms.
   std::map<std::string, double> tolerated_by_channel;
+  // The same for the part of each channel's residual slower than the fast band, by name; a channel
+  // without one is judged in total only.
+  std::map<std::string, double> tolerated_slow_by_channel;
   ResidualTestOptions tests;
   LocateOptions locate;
   ProgressCallback progress;       // share of the candidates explained, and the candidate

@@ -122,7 +122,8 @@ json to_json(const Diagnosis& d) {
   json channels = json::array();
   for (const auto& c : d.channels) {
     channels.push_back({{"name", c.name}, {"nominal_rms_mm", json_number(c.rms)}, {"noise_mm", json_number(c.noise)},
-                        {"tolerated_mm", json_number(c.tolerated)}, {"ordinary", c.ordinary}});
+                        {"tolerated_mm", json_number(c.tolerated)}, {"slow_rms_mm", json_number(c.slow_rms)},
+                        {"slow_tolerated_mm", json_number(c.slow_tolerated)}, {"ordinary", c.ordinary}});
   }
   // The candidates that scored above the verdict and why each was passed over.
   json passed_over = json::array();
@@ -197,6 +198,9 @@ std::string text_summary(const Diagnosis& d) {
   for (const auto& c : d.channels) {
     s << "  " << c.name << ": nominal RMS " << format_figure(c.rms, 3) << " mm, noise " << format_figure(c.noise, 3) << " mm"
       << (c.tolerated > 0.0 ? ", tolerated " + format_figure(c.tolerated, 3) + " mm" : std::string())
+      << (c.slow_tolerated > 0.0 ? "; slower than 2 s " + format_figure(c.slow_rms, 3) + " mm, tolerated " +
+                                       format_figure(c.slow_tolerated, 3) + " mm"
+                                 : std::string())
       << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
   }
   if (d.form && d.form->holds) {

@@ -199,6 +199,9 @@ struct Scenario {
   double calibrated_baseline_rms_mm = 0.0;
   // [calibration.baseline_rms]: the same residual RMS for each level channel [mm].
   std::map<std::string, double> calibrated_baseline_rms_by_channel;
+  // [calibration.baseline_slow_rms]: that residual's part slower than 2 s [mm]
+  // (DiagnoseOptions::baseline_slow_rms_by_channel).
+  std::map<std::string, double> calibrated_baseline_slow_rms_by_channel;
 
   const ExperimentSpec* find_experiment(const std::string& name) const;
 };

@@ -258,13 +258,15 @@ void read_calibration(TomlTable t, Scenario& s) {
       (*out)[name] = st.number(name, 0.0, {0.0, 1.0e6}, "(a standard deviation in the parameter's unit)");
     }
   }
-  if (t.has("baseline_rms")) {
-    TomlTable rms = t.table("baseline_rms");
+  for (const auto& [table, out] : {std::pair{"baseline_rms", &s.calibrated_baseline_rms_by_channel},
+                                   std::pair{"baseline_slow_rms", &s.calibrated_baseline_slow_rms_by_channel}}) {
+    if (!t.has(table)) continue;
+    TomlTable rms = t.table(table);
     for (const std::string& channel : rms.keys()) {
       if (channel.rfind("y_", 0) != 0 || channel.size() < 6 || channel.compare(channel.size() - 3, 3, "_mm") != 0) {
         rms.fail(channel, "expected a level channel (y_up_mm, y_dw_mm, y_dwe_mm, y_checkN_mm)");
       }
-      s.calibrated_baseline_rms_by_channel[channel] = rms.number(channel, 0.0, {0.0, 1.0e6}, "mm");
+      (*out)[channel] = rms.number(channel, 0.0, {0.0, 1.0e6}, "mm");
     }
   }
   t.reject_unknown_keys();
