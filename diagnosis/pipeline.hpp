@@ -104,8 +104,8 @@ struct ChannelFigures {
   // but at least none_noise_factor × what the noise leaves of it, noise / sqrt(samples averaged).
   double slow_rms = 0.0, slow_tolerated = 0.0;
   // rms ≤ none_noise_factor × noise, or rms ≤ tolerated with slow_rms ≤ slow_tolerated (when
-  // known): within the model's own error in total and in the slower part, where a bore's
-  // smearing does not reach
+  // known): within the noise, or within the model's own error in total and in the slower part,
+  // where a bore's smearing does not reach
   bool ordinary = true;
 };
 
