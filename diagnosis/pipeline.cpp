@@ -119,16 +119,21 @@ void explain_with_several(Explainer& explainer, const PipelineSettings& settings
   }
 }
 
+// How far a channel's residual stands beyond what is ordinary for it, in total: a channel beyond
+// its tolerance only in the slower part, where the model's error is small, would otherwise
+// outrank the channel the residual is largest on. The verdict's reason and the location rank by it.
+double excess(const ChannelFigures& c, double none_noise_factor) {
+  return c.rms / std::max({none_noise_factor * c.noise, c.tolerated, 1e-12});
+}
+
 // The level channel furthest beyond what is ordinary for it (the primary when none is).
 std::string furthest_channel(const Diagnosis& d, double none_noise_factor) {
   std::string out = d.channels.empty() ? "" : d.channels.front().name;
   double worst = 0.0;
   for (const auto& c : d.channels) {
-    // In total: a channel beyond its tolerance only in the slower part, where the model's error
-    // is small, would otherwise outrank the channel the residual is largest on.
-    const double excess = c.rms / std::max({none_noise_factor * c.noise, c.tolerated, 1e-12});
-    if (!c.ordinary && excess > worst) {
-      worst = excess;
+    const double beyond = excess(c, none_noise_factor);
+    if (!c.ordinary && beyond > worst) {
+      worst = beyond;
       out = c.name;
     }
   }
@@ -485,7 +490,7 @@ bool set_verdict(Diagnosis& d, double none_noise_factor) {
   const ChannelFigures* unusual = nullptr;
   for (const auto& c : d.channels) {
     const bool ordinary = c.ordinary || (&c == &d.channels.front() && primary_white);
-    if (!ordinary && (!unusual || c.rms / std::max(c.noise, 1e-12) > unusual->rms / std::max(unusual->noise, 1e-12))) {
+    if (!ordinary && (!unusual || excess(c, none_noise_factor) > excess(*unusual, none_noise_factor))) {
       unusual = &c;
     }
   }

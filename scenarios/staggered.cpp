@@ -172,12 +172,12 @@ class StaggeredPool {
     const auto imbalance = [&](double h) {
       return gate_discharge(head_, y_up, h, opening) - downstream_.discharge(h);
     };
-    double lo = 1e-4, hi = y_up;
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (imbalance(mid) > 0.0 ? lo : hi) = mid;
-    }
-    std::fill(depth_.begin(), depth_.end(), 0.5 * (lo + hi));
+    // The depth at which the gate passes what the downstream structure does: a level pool to
+    // start from, which the settling run then brings to the steady profile.
+    const double shallow = 1e-4;
+    const solver::IllinoisResult root = solver::illinois(imbalance, shallow, y_up, imbalance(shallow), imbalance(y_up),
+                                                         {.max_iterations = 200, .absolute_width = 1e-12, .bisect_every = 4});
+    std::fill(depth_.begin(), depth_.end(), 0.5 * (root.lo + root.hi));
     const double q = gate_discharge(head_, y_up, depth_[0], opening);
     for (int j = 0; j <= cells_; ++j) {
       flux_[j] = q;
