@@ -355,9 +355,9 @@ bool is_significant(const EffectResult& e, const SignificanceRule& rule) {
 namespace {
 
 // One level channel's figures over every recording: its noise (each recording's estimate from the
-// recorded series, pooled in quadrature) and the nominal residual RMS.
-// The channel's noise, its residual's RMS in total and in the part slower than the fast band, and
-// what the noise leaves of that part: white noise averaged over the band's window of samples.
+// recorded series, pooled in quadrature), the nominal residual's RMS in total and in the part
+// slower than the fast band, and what the noise leaves of that part (white noise averaged over
+// the band's window of samples).
 struct ChannelMeasures {
   ChannelFigures figures;
   double slow_noise = 0.0;
