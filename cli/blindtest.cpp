@@ -27,6 +27,7 @@ struct BlindtestArguments {
   double duration = 0.0;
   std::vector<std::string> experiments = {"op1", "op2", "op3", "op4"};
   std::vector<std::string> effects;
+  std::vector<int> only;
   bool verbose = false;
   bool realistic = false;
   int two_effect_trials = 10;
@@ -55,6 +56,7 @@ void run(const BlindtestArguments& args) {
   options.duration_s = args.duration;
   options.experiments = args.experiments;
   options.effects = args.effects;
+  options.only = args.only;
   if (!args.model.empty()) {
     diagnosis::ModelDiagnoseOptions m;
     m.kind = reduced::require_model_kind(args.model);
@@ -69,7 +71,8 @@ void run(const BlindtestArguments& args) {
     options.realistic = realistic;
   }
   if (const Status status = options.validate(); !status) throw InputError("blindtest: " + status.message());
-  const int total = args.trials + (args.realistic ? args.two_effect_trials : 0);
+  const int total = args.only.empty() ? args.trials + (args.realistic ? args.two_effect_trials : 0)
+                                      : static_cast<int>(args.only.size());
   // Under mpirun every process runs trials; rank 0 alone reports them (cluster/distribute.hpp).
   if (!cluster::is_root()) {
     diagnosis::run_blindtest(s, options);
@@ -141,6 +144,10 @@ void add_blindtest_command(CLI::App& app) {
   cmd->add_option("--experiments", args->experiments, "Experiments simulated per trial, by spaces or commas (default op1 op2 op3 op4)")
       ->delimiter(',');
   cmd->add_option("--effects", args->effects, "Draw only these effects (and none), by spaces or commas: catalog rows (a per-channel row goes on a drawn level channel), sensor_offset[y_dwe_mm], or with --realistic gate_backlash and depth_seepage; default the whole catalog, and with --realistic those two")
+      ->delimiter(',');
+  cmd->add_option("--only", args->only,
+                  "Run only these trials of the drawn set, by index (spaces or commas): each is the trial of the full "
+                  "test, e.g. a miss re-run with -v")
       ->delimiter(',');
   cmd->add_flag("--verbose,-v", args->verbose, "Print every trial");
   cmd->add_flag("--realistic", args->realistic,

@@ -36,26 +36,6 @@ void throw_first(const std::vector<std::string>& problems, const std::string& co
   if (!problems.empty()) throw InputError(problems.front() + context);
 }
 
-// The calibration of the baseline, replayed exactly as the diagnosis replays (diagnosis_replay,
-// diagnose.hpp; every sample fitted), as the realistic blind test calibrates: what the calibration
-// fits is then the model the diagnosis compares with.
-calibration::CalibrateOptions calibration_options(const BaselineOptions& o) {
-  calibration::CalibrateOptions c;
-  c.parameters = o.parameters;
-  c.starts = o.calibration_starts;
-  c.max_iterations = o.calibration_iterations;
-  c.threads = o.diagnosis.threads;
-  c.grid_check = o.grid_check;
-  c.replay = diagnosis_replay(o.diagnosis);
-  c.replay.fit_fraction = 1.0;
-  if (o.progress) {
-    c.progress = [&o](const ProgressReport& r) {
-      o.progress({r.fraction < 0.0 ? -1.0 : kCalibrationShare * r.fraction, "calibrating on the baseline: " + r.message});
-    };
-  }
-  return c;
-}
-
 }  // namespace
 
 Status BaselineOptions::validate() const {
@@ -252,6 +232,31 @@ std::vector<std::string> baseline_coverage(const std::vector<Recording>& baselin
   return warnings;
 }
 
+calibration::CalibrateOptions baseline_calibration_options(const BaselineOptions& o) {
+  calibration::CalibrateOptions c;
+  c.parameters = o.parameters;
+  c.starts = o.calibration_starts;
+  c.max_iterations = o.calibration_iterations;
+  c.threads = o.diagnosis.threads;
+  c.grid_check = o.grid_check;
+  c.replay = diagnosis_replay(o.diagnosis);
+  c.replay.fit_fraction = 1.0;
+  if (o.progress) {
+    c.progress = [&o](const ProgressReport& r) {
+      o.progress({r.fraction < 0.0 ? -1.0 : kCalibrationShare * r.fraction, "calibrating on the baseline: " + r.message});
+    };
+  }
+  return c;
+}
+
+DiagnoseOptions against_calibration(const calibration::Calibration& calibration, DiagnoseOptions d) {
+  d.calibrated_std = calibrated_std_alone_of(calibration);
+  d.baseline_rms_mm = baseline_rms_of(calibration, d.primary);
+  d.baseline_rms_by_channel = baseline_rms_by_channel(calibration);
+  d.baseline_slow_rms_by_channel = baseline_slow_rms_by_channel(calibration);
+  return d;
+}
+
 BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline_in,
                                          const std::vector<Recording>& recordings_in, const BaselineOptions& o) {
   if (const Status status = o.validate(); !status) throw InputError("baseline diagnosis options: " + status.message());
@@ -263,19 +268,15 @@ BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, co
 
   BaselineDiagnosis out;
   for (const Recording& b : baseline) out.baseline.push_back(name_of(b));
-  out.calibration = calibration::calibrate(scenario, baseline, {}, calibration_options(o));
-  const std::map<std::string, double> slow_rms = baseline_slow_rms_by_channel(out.calibration);
-  out.calibration.series.clear();  // plots of the baseline belong to `canalsim calibrate --report`
+  out.calibration = calibration::calibrate(scenario, baseline, {}, baseline_calibration_options(o));
   if (!out.calibration.ok) {
+    out.calibration.series.clear();
     out.diagnosis.ok = false;
     out.diagnosis.message = "calibration on the baseline failed: " + out.calibration.message;
     return out;
   }
-  DiagnoseOptions d = o.diagnosis;
-  d.calibrated_std = calibrated_std_alone_of(out.calibration);
-  d.baseline_rms_mm = baseline_rms_of(out.calibration, d.primary);
-  d.baseline_rms_by_channel = baseline_rms_by_channel(out.calibration);
-  d.baseline_slow_rms_by_channel = slow_rms;
+  DiagnoseOptions d = against_calibration(out.calibration, o.diagnosis);
+  out.calibration.series.clear();  // plots of the baseline belong to `canalsim calibrate --report`
   d.progress = nullptr;
   if (o.progress) {
     d.progress = [&o](const ProgressReport& r) {

@@ -114,6 +114,16 @@ nlohmann::json baseline_json(const BaselineDiagnosis& result);
 // free-flow law is not determined by a baseline that never ran free. Empty when covered.
 std::vector<std::string> baseline_coverage(const std::vector<Recording>& baseline, const std::vector<Recording>& recordings);
 
+// Step 2's options: the calibration of the baseline replayed exactly as the diagnosis replays
+// (diagnosis_replay, diagnose.hpp; every sample fitted), as the realistic blind test calibrates:
+// what the calibration fits is then the model the diagnosis compares with.
+calibration::CalibrateOptions baseline_calibration_options(const BaselineOptions& options);
+
+// Step 3's options: `diagnosis` with what `calibration` left open (calibrated_std_alone_of) and
+// what it left on its baseline, in total and slower than the fast band. Needs the calibration's
+// series (baseline_slow_rms_by_channel).
+DiagnoseOptions against_calibration(const calibration::Calibration& calibration, DiagnoseOptions diagnosis);
+
 // Runs the three steps. Throws InputError (incompatible or unusable recordings, bad options);
 // a calibration that fails numerically is returned with diagnosis.ok = false and its message.
 BaselineDiagnosis diagnose_with_baseline(const scenarios::Scenario& scenario, const std::vector<Recording>& baseline,

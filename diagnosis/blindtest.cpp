@@ -61,6 +61,10 @@ Status BlindtestOptions::validate() const {
     check.require(effect_from_name(e).has_value() || kind_named(e) != nullptr || outside, "effects",
                   "unknown effect '" + e + "' (expected one of " + catalog_names() + ")");
   }
+  const int drawn = trials + (realistic ? realistic->two_effect_trials : 0);
+  for (int index : only) {
+    check.require(index >= 0 && index < drawn, "only", index, "a trial index in 0.." + std::to_string(drawn - 1));
+  }
   check.nested("diagnose", diagnose.validate());
   check.require(!(model && realistic), "realistic", "not with a reduced model (the realistic test calibrates a scenario)");
   if (realistic) check.nested("realistic", realistic->validate());
@@ -322,6 +326,9 @@ BlindtestResult run_blindtest(const scenarios::Scenario& base, const BlindtestOp
 
   BlindtestResult result;
   result.trials = draw_trials(o, classes);
+  if (!o.only.empty()) {
+    std::erase_if(result.trials, [&](const Trial& t) { return std::find(o.only.begin(), o.only.end(), t.index) == o.only.end(); });
+  }
   blind::TrialContext context{base, experiments, inflow, o, o.diagnose};
   context.diagnose.threads = 1;
   context.diagnose.progress = nullptr;

@@ -81,6 +81,9 @@ struct BlindtestOptions {
   // `none` trials are added when include_none.
   std::vector<std::string> effects;
   bool include_none = true;
+  // When not empty, only these trials (by index) of the drawn set are run and scored: a trial's
+  // outcome depends on its index alone, so a trial re-run this way is the one of the full test.
+  std::vector<int> only;
   DiagnoseOptions diagnose;         // its threads are set to 1: trials are the parallel unit
   // When set, the recordings are diagnosed against this reduced model (diagnose_model) instead
   // of the scenario; only the effects a reduced model can name make sense to draw then

@@ -9,6 +9,7 @@
 
 #include "calibration/calibrate.hpp"
 #include "calibration/replay.hpp"
+#include "calibration/residual_breakdown.hpp"
 #include "core/declared_units.hpp"
 #include "core/format.hpp"
 #include "core/parallel.hpp"
@@ -163,6 +164,11 @@ Costs Engine::costs(const std::vector<Channels>& prediction) const {
       c.heldout += w * sh;
       c.mse_fit[name] += sf;
       c.mse_heldout[name] += sh;
+      if (calibration::is_level(name)) {
+        std::vector<double> heldout(p.n - p.n_fit);
+        for (std::size_t k = p.n_fit; k < p.n; ++k) heldout[k - p.n_fit] = y[k] - it->second[k];
+        for (double v : calibration::slower_than_fast_band(heldout, period_)) c.mse_heldout_slow[name] += v * v;
+      }
       fit_n += static_cast<double>(p.n_fit);
       held_n += static_cast<double>(p.n - p.n_fit);
     }
@@ -184,25 +190,37 @@ Costs Engine::costs(const std::vector<Channels>& prediction) const {
     }
     v /= std::max(nf, 1.0);
     c.mse_heldout[name] /= std::max(nh, 1.0);
+    if (const auto slow = c.mse_heldout_slow.find(name); slow != c.mse_heldout_slow.end()) slow->second /= std::max(nh, 1.0);
   }
   c.nrmse_fit /= static_cast<double>(std::max<std::size_t>(recs_.size(), 1));
   c.nrmse_heldout /= static_cast<double>(std::max<std::size_t>(recs_.size(), 1));
   return c;
 }
 
-double Engine::balanced(const Costs& c, bool heldout) const {
-  const auto& mse = heldout ? c.mse_heldout : c.mse_fit;
-  const auto& reference = heldout ? nominal_costs_.mse_heldout : nominal_costs_.mse_fit;
+double cost_reference_floor(const std::string& channel) { return channel == columns::discharge ? 0.003 : 0.03; }
+
+namespace {
+
+// mean_c MSE_c / max(reference_c, floor_c²) over the channels of `mse`.
+double balanced_over(const std::map<std::string, double>& mse, const std::map<std::string, double>& reference) {
   double sum = 0.0;
   int count = 0;
   for (const auto& [name, v] : mse) {
-    const double floor = name == columns::discharge ? 0.003 : 0.03;
+    const double floor = cost_reference_floor(name);
     const auto it = reference.find(name);
     sum += v / std::max(it == reference.end() ? 0.0 : it->second, floor * floor);
     ++count;
   }
   return count ? sum / count : 0.0;
 }
+
+}  // namespace
+
+double Engine::balanced(const Costs& c, bool heldout) const {
+  return heldout ? balanced_over(c.mse_heldout, nominal_costs_.mse_heldout) : balanced_over(c.mse_fit, nominal_costs_.mse_fit);
+}
+
+double Engine::balanced_slow(const Costs& c) const { return balanced_over(c.mse_heldout_slow, nominal_costs_.mse_heldout_slow); }
 
 void Engine::simulate_nominal() {
   truth_.assign(recs_.size(), {});
@@ -424,6 +442,7 @@ EffectResult Engine::unchanged(const Effect& effect, const Costs& model) const {
   out.parameter.unit = effect.kind->unit;
   out.cost_before = out.cost_after = balanced(model, false);
   out.heldout_cost_before = out.heldout_cost_after = balanced(model, true);
+  out.heldout_slow_cost_before = out.heldout_slow_cost_after = balanced_slow(model);
   out.nrmse_before = out.nrmse_after = model.nrmse_fit;
   out.heldout_nrmse_before = out.heldout_nrmse_after = model.nrmse_heldout;
   return out;
@@ -439,9 +458,13 @@ EffectResult Engine::judged_against(const Effect& effect, const Point& with, con
   const Costs after = costs(with.prediction);
   out.cost_after = balanced(after, false);
   out.heldout_cost_after = balanced(after, true);
+  out.heldout_slow_cost_after = balanced_slow(after);
   out.nrmse_after = after.nrmse_fit;
   out.heldout_nrmse_after = after.nrmse_heldout;
   out.score = out.heldout_cost_before > 0.0 ? (out.heldout_cost_before - out.heldout_cost_after) / out.heldout_cost_before : 0.0;
+  out.slow_score = out.heldout_slow_cost_before > 0.0
+                       ? (out.heldout_slow_cost_before - out.heldout_slow_cost_after) / out.heldout_slow_cost_before
+                       : 0.0;
   const double n_eff = static_cast<double>(fit_samples_) / inflation_;
   out.delta_bic = bic_change(n_eff, out.cost_before, out.cost_after);
   out.parameter.value = to_parameter(effect, with.theta);
@@ -472,6 +495,7 @@ EffectResult Engine::judge(const Effect& effect, Point best, int sims) {
     out.parameter.value = value;
     out.material = value >= std::max(effect.kind->material, 2.0 * sensors_.resolution_mm);
     out.score = out.material ? heldout_coherence(value, channels_of(effect)) : 0.0;
+    out.slow_score = 0.0;
     out.significant = out.material && out.score >= 0.9;
     out.set_aside = out.significant ? ""
                     : !out.material ? "the recorded lattice is the modelled resolution"
@@ -646,6 +670,7 @@ Diagnosis diagnose(const scenarios::Scenario& scenario, const std::vector<Record
   scenario_engine::Engine engine(scenario, recordings, options);
   PipelineSettings settings;
   settings.none_noise_factor = options.none_noise_factor;
+  settings.significance = {options.min_score, options.min_bic_gain, true};
   settings.tolerated_rms = options.baseline_factor * options.baseline_rms_mm;
   for (const auto& [channel, rms] : options.baseline_rms_by_channel) {
     settings.tolerated_by_channel[channel] = options.baseline_factor * rms;

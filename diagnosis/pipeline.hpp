@@ -56,6 +56,11 @@ struct EffectResult {
   double heldout_nrmse_before = 0.0, heldout_nrmse_after = 0.0;  // primary, held-out part
   double cost_before = 0.0, cost_after = 0.0;                    // channel-balanced, fitted part
   double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
+  // The same on the level channels' held-out part slower than the fast band
+  // (calibration::slower_than_fast_band), and its relative reduction; 0 where the engine does
+  // not measure it.
+  double heldout_slow_cost_before = 0.0, heldout_slow_cost_after = 0.0;
+  double slow_score = 0.0;
   double delta_bic = 0.0;        // BIC(after) − BIC(before) on the fitted part
   // The held-out fit improves on some compared channel and gets materially worse on none (the
   // engine's judgement; for one channel: its held-out Nrmse rises).
@@ -219,8 +224,21 @@ class Explainer {
                                     Diagnosis& /*d*/) {}
 };
 
+// The significance rule of every engine: a material parameter, a held-out cost reduction of at
+// least min_score and a BIC gain of at least min_bic_gain; optionally the held-out fit must
+// improve on a channel and worsen on none too ("show the fit improve": a pooled cost can fall
+// through one channel or recording while another gets worse).
+struct SignificanceRule {
+  double min_score = 0.15;
+  double min_bic_gain = 10.0;
+  bool heldout_fit_must_improve = false;
+};
+
 struct PipelineSettings {
   double none_noise_factor = 3.0;  // "within the noise": a channel's RMS <= this × its noise
+  // The engine's significance rule, applied by step 4 to the held-out cost slower than the fast
+  // band when only that part of a channel is beyond what the calibration tolerates.
+  SignificanceRule significance;
   // A primary RMS up to this is ordinary too [mm] (what a calibration leaves on its baseline).
   double tolerated_rms = 0.0;
   // The same for other level channels, by name; a channel without one takes tolerated_rms.
@@ -256,16 +274,9 @@ Diagnosis run_pipeline(Explainer& explainer, const std::vector<std::string>& can
 // parameters the effect adds (Schwarz 1978).
 double bic_change(double n_eff, double cost_before, double cost_after, int extra_parameters = 1);
 
-// The significance rule of every engine: a material parameter, a held-out cost reduction of at
-// least min_score and a BIC gain of at least min_bic_gain; optionally the held-out fit must
-// improve on a channel and worsen on none too ("show the fit improve": a pooled cost can fall
-// through one channel or recording while another gets worse).
-struct SignificanceRule {
-  double min_score = 0.15;
-  double min_bic_gain = 10.0;
-  bool heldout_fit_must_improve = false;
-};
-bool is_significant(const EffectResult& effect, const SignificanceRule& rule);
+// Whether `effect` passes the rule (its score, or with `slower_part` its slow_score, against
+// min_score).
+bool is_significant(const EffectResult& effect, const SignificanceRule& rule, bool slower_part = false);
 // Why `effect` fails the rule, every failed condition in words ("not material: ..."); empty when
 // it passes. The engines store it in EffectResult::set_aside, so that a better-scoring candidate
 // the verdict passed over says why.

@@ -86,7 +86,10 @@ json to_json(const Diagnosis& d) {
                        {"heldout_nrmse_after", json_number(e.heldout_nrmse_after)},
                        {"cost_before", json_number(e.cost_before)}, {"cost_after", json_number(e.cost_after)},
                        {"heldout_cost_before", json_number(e.heldout_cost_before)},
-                       {"heldout_cost_after", json_number(e.heldout_cost_after)}, {"delta_bic", json_number(e.delta_bic)},
+                       {"heldout_cost_after", json_number(e.heldout_cost_after)},
+                       {"slow_score", json_number(e.slow_score)},
+                       {"heldout_slow_cost_before", json_number(e.heldout_slow_cost_before)},
+                       {"heldout_slow_cost_after", json_number(e.heldout_slow_cost_after)}, {"delta_bic", json_number(e.delta_bic)},
                        {"simulations", e.simulations}, {"note", e.note},
                        {"heldout_improves", e.heldout_improves}, {"set_aside", e.set_aside}});
   }

@@ -36,7 +36,14 @@ struct Costs {
   double nrmse_fit = 0.0, nrmse_heldout = 0.0;
   // Per-channel mean squared residual (raw units²) on the fitted and held-out parts.
   std::map<std::string, double> mse_fit, mse_heldout;
+  // The same on the held-out part of each level channel's residual slower than the fast band
+  // (calibration::slower_than_fast_band), where a calibrated model's own error is small.
+  std::map<std::string, double> mse_heldout_slow;
 };
+
+// The floor of a channel's reference in the channel-balanced costs [its unit]: a channel the
+// nominal model already fits to within it weighs as if it missed by that much.
+double cost_reference_floor(const std::string& channel);
 
 // The scenario half of the pipeline (pipeline.hpp): replays the recordings through the scenario,
 // fits each catalog effect by re-simulating (or, for sensor effects, by re-observing the nominal
@@ -82,6 +89,8 @@ class Engine final : public Explainer {
   // however small that channel's share of the weighted cost (a 0.1 mm lattice error in the
   // levels next to gate-position glitches).
   double balanced(const Costs& c, bool heldout) const;
+  // The same on the level channels' held-out part slower than the fast band.
+  double balanced_slow(const Costs& c) const;
   Channels simulate_true(const Scenario& s, const Prepared& p);
   // The scenario that replays recording i: the base with the carried hydraulic effects.
   Scenario scenario_for(std::size_t i) const;
@@ -135,7 +144,8 @@ class Engine final : public Explainer {
   // Detection thresholds (thresholds.cpp).
   struct Signature;
   Signature signature_of(const Effect& effect, const std::vector<Channels>& model, const std::vector<Channels>& base);
-  DetectionThreshold threshold_of(const Effect& effect, const Signature& signature) const;
+  DetectionThreshold threshold_of(const Effect& effect, const Signature& signature,
+                                  const std::vector<ChannelFigures>& channels, double none_noise_factor) const;
 
   Scenario base_;                    // with the hydraulic effects an explanation carries (with_effects)
   // The command and reading effects an explanation carries (with_effects), applied in prepare().

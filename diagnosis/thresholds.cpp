@@ -10,12 +10,17 @@
 // quadratics Σ r0², Σ r0·m, Σ m², so the pipeline's own rule — held-out score on the
 // channel-balanced cost, BIC gain with the correlated-sample count, materiality beyond the
 // calibration's tolerance, a held-out fit that improves — is evaluated at any δ in closed form,
-// and the threshold is the smallest δ on each side that passes it. Linear in θ: a first-order
-// picture, which the tests hold to "twice the threshold is named, half is not".
+// and the threshold is the smallest δ on each side that passes it. Step 4's second route is
+// evaluated the same way on the level channels' part slower than the fast band (a linear filter:
+// the slower part of r0 + δ m is that of r0 plus δ times that of m): a residual beyond the
+// calibration's tolerance only there, a candidate that passes the rule on that part's held-out
+// cost and leaves every level channel ordinary. Linear in θ: a first-order picture, which the
+// tests hold to "twice the threshold is named, half is not".
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "calibration/residual_breakdown.hpp"
 #include "core/format.hpp"
 #include "diagnosis/calibrated.hpp"
 #include "diagnosis/scenario_engine.hpp"
@@ -34,15 +39,15 @@ struct Engine::Signature {
   bool ok = false;
   double step = 0.0;                          // the probe step in θ
   std::map<std::string, ChannelSums> fit, heldout;
+  // Level channels' parts slower than the fast band: of the whole records (the channels'
+  // figures) and of the held-out parts (the score), each filtered as the engine filters it.
+  std::map<std::string, ChannelSums> slow_whole, slow_heldout;
   std::vector<double> energy;                 // Σ w m² per recording (where the effect shows most)
 };
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// The floor of a channel's reference in the balanced cost (Engine::balanced).
-double floor_of(const std::string& channel) { return channel == columns::discharge ? 0.003 : 0.03; }
 
 // mean_c MSE_c(x) / reference_c: the engine's channel-balanced cost of r0 + x m.
 double balanced_cost(const std::map<std::string, ChannelSums>& sums, double x, const std::map<std::string, double>& reference) {
@@ -56,6 +61,47 @@ double balanced_cost(const std::map<std::string, ChannelSums>& sums, double x, c
   return count ? sum / count : 0.0;
 }
 
+// The balanced cost's references for recordings that leave r0 + x m against the nominal model:
+// their mean squares, floored as the engine floors them.
+std::map<std::string, double> references_at(const std::map<std::string, ChannelSums>& sums, double x) {
+  std::map<std::string, double> out;
+  for (const auto& [c, s] : sums) out[c] = std::max(s.mse(x), cost_reference_floor(c) * cost_reference_floor(c));
+  return out;
+}
+
+void add(ChannelSums& s, double r0, double m) {
+  s.rr += r0 * r0;
+  s.rm += r0 * m;
+  s.mm += m * m;
+  s.n += 1.0;
+}
+
+// The sums of the parts of r0 and m slower than the fast band.
+void add_slower_parts(const std::vector<double>& r0, const std::vector<double>& m, double period_s, ChannelSums& s) {
+  const std::vector<double> slow_r0 = calibration::slower_than_fast_band(r0, period_s);
+  const std::vector<double> slow_m = calibration::slower_than_fast_band(m, period_s);
+  for (std::size_t n = 0; n < slow_r0.size(); ++n) add(s, slow_r0[n], slow_m[n]);
+}
+
+// A channel's figures for recordings that leave r0 + x m against the model: ordinary as
+// set_noise_figures judges it, and beyond only in its part slower than the fast band.
+struct ChannelState {
+  bool ordinary = true, only_slow_beyond = false;
+};
+ChannelState state_of(const ChannelFigures& f, double none_noise_factor, const ChannelSums& fit, const ChannelSums& heldout,
+                      const ChannelSums& slow, double x) {
+  const double n = fit.n + heldout.n;
+  const double rms = n > 0.0 ? std::sqrt((fit.mse(x) * fit.n + heldout.mse(x) * heldout.n) / n) : 0.0;
+  const double slow_rms = std::sqrt(slow.mse(x));
+  const bool within_noise = rms <= none_noise_factor * f.noise;
+  const bool within_total = within_noise || (f.tolerated > 0.0 && rms <= f.tolerated);
+  const bool slow_within = f.slow_tolerated == 0.0 || slow_rms <= f.slow_tolerated;
+  ChannelState s;
+  s.ordinary = within_noise || (f.tolerated > 0.0 && rms <= f.tolerated && slow_within);
+  s.only_slow_beyond = !s.ordinary && within_total;
+  return s;
+}
+
 }  // namespace
 
 Engine::Signature Engine::signature_of(const Effect& effect, const std::vector<Channels>& model,
@@ -66,20 +112,22 @@ Engine::Signature Engine::signature_of(const Effect& effect, const std::vector<C
   const std::vector<Channels> probed = predict({{effect, k.theta_none + sig.step}}, Readings::expected);
   sig.energy.assign(recs_.size(), 0.0);
   for (std::size_t i = 0; i < recs_.size(); ++i) {
-    for (const auto& [c, y] : recs_[i].data) {
+    const Prepared& rec = recs_[i];
+    for (const auto& [c, y] : rec.data) {
       const auto mo = model[i].find(c), b = base[i].find(c), p = probed[i].find(c);
       if (mo == model[i].end() || b == base[i].end() || p == probed[i].end()) continue;
       const double w = weight_.at(c);
-      for (std::size_t n = 0; n < recs_[i].n; ++n) {
-        const double r0 = y[n] - mo->second[n];
-        const double m = -(p->second[n] - b->second[n]) / sig.step;  // r = data − model: the model rises by −m
-        ChannelSums& s = n < recs_[i].n_fit ? sig.fit[c] : sig.heldout[c];
-        s.rr += r0 * r0;
-        s.rm += r0 * m;
-        s.mm += m * m;
-        s.n += 1.0;
-        sig.energy[i] += w * m * m;
+      std::vector<double> r0(rec.n), m(rec.n);
+      for (std::size_t n = 0; n < rec.n; ++n) {
+        r0[n] = y[n] - mo->second[n];
+        m[n] = -(p->second[n] - b->second[n]) / sig.step;  // r = data − model: the model rises by −m
+        add(n < rec.n_fit ? sig.fit[c] : sig.heldout[c], r0[n], m[n]);
+        sig.energy[i] += w * m[n] * m[n];
       }
+      if (!calibration::is_level(c)) continue;
+      add_slower_parts(r0, m, period_, sig.slow_whole[c]);
+      const auto split = static_cast<std::ptrdiff_t>(rec.n_fit);
+      add_slower_parts({r0.begin() + split, r0.end()}, {m.begin() + split, m.end()}, period_, sig.slow_heldout[c]);
     }
   }
   double wmm = 0.0;
@@ -90,7 +138,8 @@ Engine::Signature Engine::signature_of(const Effect& effect, const std::vector<C
 
 // The threshold on each side: the smallest δ on a geometric grid from a tenth of the material
 // departure to the catalog's range at which recordings with the effect would pass the rule.
-DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& sig) const {
+DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& sig, const std::vector<ChannelFigures>& channels,
+                                        double none_noise_factor) const {
   const EffectKind& k = *effect.kind;
   DetectionThreshold t{effect.name(), k.parameter, k.unit, kNaN, kNaN};
   if (!sig.ok) return t;
@@ -105,11 +154,27 @@ DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& s
   double opening = 0.0;
   for (const auto& p : recs_) opening += p.operating_point_mm / static_cast<double>(recs_.size());
   const double open = o_.calibrated_z * calibration_uncertainty(effect, base_, o_.calibrated_std, opening);
+  // Step 4's second route: some level channel beyond only in its slower part, none beyond in
+  // total; the fit leaves every level channel ordinary and reduces that part's held-out cost by
+  // min_score.
+  const auto passes_slower_part = [&](double delta) {
+    bool beyond = false, after_ordinary = true;
+    for (const ChannelFigures& f : channels) {
+      const auto fit = sig.fit.find(f.name), held = sig.heldout.find(f.name), slow = sig.slow_whole.find(f.name);
+      if (fit == sig.fit.end() || held == sig.heldout.end() || slow == sig.slow_whole.end()) continue;
+      const ChannelState before = state_of(f, none_noise_factor, fit->second, held->second, slow->second, delta);
+      if (!before.ordinary && !before.only_slow_beyond) return false;
+      beyond = beyond || before.only_slow_beyond;
+      after_ordinary = after_ordinary && state_of(f, none_noise_factor, fit->second, held->second, slow->second, -b).ordinary;
+    }
+    if (!beyond || !after_ordinary) return false;
+    const auto reference = references_at(sig.slow_heldout, delta);
+    const double before = balanced_cost(sig.slow_heldout, delta, reference), after = balanced_cost(sig.slow_heldout, -b, reference);
+    return before > 0.0 && (before - after) / before >= o_.min_score;
+  };
   const auto passes = [&](double delta) {
     // The balanced costs take the nominal model's residual of those recordings as reference.
-    std::map<std::string, double> ref_fit, ref_held;
-    for (const auto& [c, s] : sig.fit) ref_fit[c] = std::max(s.mse(delta), floor_of(c) * floor_of(c));
-    for (const auto& [c, s] : sig.heldout) ref_held[c] = std::max(s.mse(delta), floor_of(c) * floor_of(c));
+    const auto ref_fit = references_at(sig.fit, delta), ref_held = references_at(sig.heldout, delta);
     const double held_before = balanced_cost(sig.heldout, delta, ref_held), held_after = balanced_cost(sig.heldout, -b, ref_held);
     const double score = held_before > 0.0 ? (held_before - held_after) / held_before : 0.0;
     const double bic = bic_change(n_eff, balanced_cost(sig.fit, delta, ref_fit), balanced_cost(sig.fit, -b, ref_fit));
@@ -121,7 +186,8 @@ DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& s
     const bool primary_better = held != sig.heldout.end() && held->second.mse(-b) < held->second.mse(delta);
     bool elsewhere = false;
     for (const auto& [c, s] : sig.heldout) elsewhere = elsewhere || (c != o_.primary && calibration::is_level(c) && s.mse(-b) < 0.99 * s.mse(delta));
-    return material && score >= o_.min_score && -bic >= o_.min_bic_gain && (primary_better || elsewhere);
+    if (!material || -bic < o_.min_bic_gain || !(primary_better || elsewhere)) return false;
+    return score >= o_.min_score || passes_slower_part(delta);
   };
   const double first = 0.1 * k.material, range = std::max(k.theta_high - k.theta_none, k.theta_none - k.theta_low);
   for (const double side : {-1.0, 1.0}) {
@@ -155,7 +221,7 @@ void Engine::detection_thresholds(const std::vector<std::string>& candidates, co
       continue;
     }
     const Signature sig = signature_of(effect, model, base);
-    const DetectionThreshold t = threshold_of(effect, sig);
+    const DetectionThreshold t = threshold_of(effect, sig, d.channels, o_.none_noise_factor);
     // How far the threshold lies beyond the smallest change of interest, on the worse side.
     double ratio = std::numeric_limits<double>::infinity();
     for (const double side : {t.below, t.above}) {

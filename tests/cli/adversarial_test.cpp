@@ -247,6 +247,7 @@ TEST(Adversarial, FlagsThatDoNotApplyAreRefused) {
       {"fit -m lfom --memory full --memory-terms 5 op1.csv", "fit --memory-terms: applies to --memory short"},
       {"fit -m lfom --upstream-level 60 op1.csv", "fit --upstream-level: model lfom does not use the upstream level"},
       {"blindtest --quantum 0.1 --trials 1", "blindtest --quantum: applies to --model"},
+      {"blindtest --trials 2 --only 2", "blindtest: only = 2: expected a trial index in 0..1"},
       {"blindtest --truth-scheme staggered --trials 1", "blindtest --truth-scheme: applies to --realistic"},
       {"simulate lab -e op1 --scheme upwind -o x.csv", "--scheme: upwind not in {finite-volume,staggered}"},
   };

@@ -131,16 +131,23 @@ TEST(Blindtest, ParameterErrorIsRelativeToTheDepartureFromNoEffect) {
   EXPECT_TRUE(std::isnan(parameter_error({"none", 0.0}, 1.0)));
 }
 
-TEST(Blindtest, ATinyRunScoresItsTrials) {
+// A blind test small enough for a unit test: `trials` of 40 s of op3, drawing and diagnosing
+// among `effects`.
+BlindtestOptions tiny(int trials, std::uint64_t seed, const std::vector<std::string>& effects) {
   BlindtestOptions o;
-  o.trials = 2;
-  o.seed = 5;
+  o.trials = trials;
+  o.seed = seed;
   o.experiments = {"op3"};
   o.duration_s = 40.0;
-  o.effects = {"sensor_offset"};
-  o.include_none = false;
-  o.diagnose.candidates = {"sensor_offset"};
+  o.effects = effects;
+  o.diagnose.candidates = effects;
   o.diagnose.settle_time_s = 100.0;
+  return o;
+}
+
+TEST(Blindtest, ATinyRunScoresItsTrials) {
+  BlindtestOptions o = tiny(2, 5, {"sensor_offset"});
+  o.include_none = false;
   const BlindtestResult r = run_blindtest(scenarios::builtin_scenario("lab"), o);
   ASSERT_EQ(r.trials.size(), 2u);
   EXPECT_EQ(r.effect_trials, 2);
@@ -149,6 +156,25 @@ TEST(Blindtest, ATinyRunScoresItsTrials) {
   EXPECT_EQ(r.channel_trials, 2);
   EXPECT_NE(format_blindtest(r, o).find("top-1 accuracy"), std::string::npos);
   EXPECT_EQ(to_json(r)["trials"].size(), 2u);
+}
+
+// A trial's outcome depends on its index alone, so a trial re-run by `only` is the trial of the
+// full test: the same concealed effect, verdict and estimate.
+TEST(Blindtest, ATrialReRunAloneIsTheTrialOfTheFullRun) {
+  BlindtestOptions o = tiny(3, 9, {"sensor_offset", "sensor_delay"});
+  const BlindtestResult full = run_blindtest(scenarios::builtin_scenario("lab"), o);
+  o.only = {2};
+  const BlindtestResult alone = run_blindtest(scenarios::builtin_scenario("lab"), o);
+  ASSERT_EQ(alone.trials.size(), 1u);
+  const Trial& a = alone.trials.front();
+  const Trial& f = full.trials.at(2);
+  EXPECT_EQ(a.index, 2);
+  EXPECT_EQ(a.truth.effect, f.truth.effect);
+  EXPECT_EQ(a.truth.value, f.truth.value);
+  EXPECT_EQ(a.verdict, f.verdict);
+  EXPECT_EQ(a.estimate, f.estimate);
+  o.only = {3};
+  EXPECT_THROW(run_blindtest(scenarios::builtin_scenario("lab"), o), InputError);
 }
 
 // The realistic blind test end to end, small: a truth on twice the cells with the other limiter
