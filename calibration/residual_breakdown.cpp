@@ -170,7 +170,7 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
                                       "> " + seconds_text(later)};
   for (const Series& s : series) {
     if (!is_level(s) || s.recorded.empty() || s.calibrated.size() != s.recorded.size()) continue;
-    const std::vector<double> r = residual(s, s.calibrated);
+    const std::vector<double> r = calibrated_residual(s);
     std::vector<std::vector<double>> choice_r(m);
     for (std::size_t j = 0; j < m; ++j) {
       const Series* c = choices[j].series ? counterpart(*choices[j].series, s) : nullptr;
@@ -220,5 +220,7 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
 std::vector<double> slower_than_fast_band(const std::vector<double>& residual, double period_s) {
   return moving_average(residual, samples_in(fast_band_edge_s, period_s));
 }
+
+std::vector<double> calibrated_residual(const Series& s) { return residual(s, s.calibrated); }
 
 }  // namespace canalsim::calibration

@@ -62,4 +62,8 @@ ResidualBreakdown residual_breakdown(const std::vector<Series>& series, const st
 constexpr double fast_band_edge_s = 2.0;
 std::vector<double> slower_than_fast_band(const std::vector<double>& residual, double period_s);
 
+// What the calibrated model leaves of a series: recorded − calibrated, sample by sample (the
+// series must carry both, of one length).
+std::vector<double> calibrated_residual(const Series& series);
+
 }  // namespace canalsim::calibration

@@ -115,10 +115,10 @@ std::map<std::string, double> baseline_slow_rms_by_channel(const calibration::Ca
   std::map<std::string, std::pair<double, std::size_t>> sums;
   for (const auto& s : c.series) {
     if (s.validation || !calibration::is_level(s.channel) || s.t.size() < 2 || s.calibrated.size() != s.recorded.size()) continue;
-    std::vector<double> r(s.recorded.size());
-    for (std::size_t k = 0; k < r.size(); ++k) r[k] = s.recorded[k] - s.calibrated[k];
-    for (double v : calibration::slower_than_fast_band(r, s.t[1] - s.t[0])) sums[s.channel].first += v * v;
-    sums[s.channel].second += r.size();
+    for (double v : calibration::slower_than_fast_band(calibration::calibrated_residual(s), s.t[1] - s.t[0])) {
+      sums[s.channel].first += v * v;
+    }
+    sums[s.channel].second += s.recorded.size();
   }
   std::map<std::string, double> out;
   for (const auto& [channel, s] : sums) out[channel] = std::sqrt(s.first / static_cast<double>(s.second));

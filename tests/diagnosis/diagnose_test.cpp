@@ -30,13 +30,7 @@ std::vector<Recording> simulate_lab(const ConcealedEffect& truth) {
     scenarios::Scenario s = lab;
     scenarios::ExperimentSpec e = short_experiment(lab, name, 80.0, s.sensors, 0.05, 11);
     const scenarios::SimulateOptions so = settled_run();
-    double inflow = 0.0;
-    if (truth.effect == "lateral_outflow") {
-      scenarios::ExperimentSpec steady = e;
-      steady.input.kind = scenarios::InputKind::constant;
-      steady.duration_s = 1.0;
-      inflow = scenarios::simulate(lab, steady, so).column("q_lps").front() * 1e-3;
-    }
+    const double inflow = truth.effect == "lateral_outflow" ? steady_inflow_m3s(lab, e) : 0.0;
     Recording r = simulate_concealed(s, e, {truth}, inflow, so);
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));

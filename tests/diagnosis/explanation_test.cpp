@@ -19,13 +19,6 @@
 namespace canalsim::diagnosis {
 namespace {
 
-// The operating point's steady inflow: lateral_outflow's reference (as the blind test takes it).
-double nominal_inflow_m3s(const scenarios::Scenario& lab, scenarios::ExperimentSpec e) {
-  e.input.kind = scenarios::InputKind::constant;
-  e.duration_s = 2.0;
-  return scenarios::simulate(lab, e).column(columns::discharge).front() * 1e-3;
-}
-
 // Recordings of `truth` (the laboratory canal by default) with the concealed catalog effects.
 std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, const std::vector<const char*>& experiments,
                               double duration_s = 80.0,
@@ -35,7 +28,7 @@ std::vector<Recording> record(const std::vector<ConcealedEffect>& concealed, con
   for (const char* name : experiments) {
     scenarios::Scenario s = truth;
     const scenarios::ExperimentSpec e = short_experiment(lab, name, duration_s, s.sensors, 0.05, 17);
-    Recording r = simulate_concealed(s, e, concealed, nominal_inflow_m3s(lab, e), settled_run());
+    Recording r = simulate_concealed(s, e, concealed, steady_inflow_m3s(lab, e), settled_run());
     r.source = std::string(name) + ".csv";
     out.push_back(std::move(r));
   }

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/recording.hpp"
 #include "diagnosis/diagnose.hpp"
 #include "scenarios/scenario.hpp"
 #include "scenarios/simulate.hpp"
@@ -35,6 +36,14 @@ inline scenarios::SimulateOptions settled_run(bool quiet = false) {
   so.settle_time = kSettle;
   if (quiet) so.warning = [](const std::string&) {};
   return so;
+}
+
+// The steady inflow of experiment `e` of `s` held at its operating opening [m³/s]: the reference
+// of a concealed lateral_outflow, as the blind test takes it.
+inline double steady_inflow_m3s(const scenarios::Scenario& s, scenarios::ExperimentSpec e) {
+  e.input.kind = scenarios::InputKind::constant;
+  e.duration_s = 2.0;
+  return scenarios::simulate(s, e).column(columns::discharge).front() * 1e-3;
 }
 
 // A diagnosis among `candidates` whose model settles as the recordings did.

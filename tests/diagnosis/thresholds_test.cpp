@@ -92,13 +92,6 @@ TEST(Thresholds, AnEffectAtTwiceItsThresholdIsNamedAndAtHalfItIsNot) {
             << trials << '\n';
 }
 
-// The steady inflow of experiment `e` of `s`: lateral_outflow's reference.
-double steady_inflow_m3s(const scenarios::Scenario& s, scenarios::ExperimentSpec e) {
-  e.input.kind = scenarios::InputKind::constant;
-  e.duration_s = 2.0;
-  return scenarios::simulate(s, e).column(columns::discharge).front() * 1e-3;
-}
-
 // Recordings of op1 and op3 by the second simulator, the gate's discharge coefficient 3 % above
 // the scenario's and the downstream gate 0.6 mm wider, with the concealed effects; `prbs` offsets
 // the command's seed (a baseline runs another PRBS than the recordings diagnosed).
