@@ -267,8 +267,7 @@ bool only_slower_part_beyond(const Diagnosis& d, double none_noise_factor) {
   bool any = false;
   for (const auto& c : d.channels) {
     if (c.ordinary) continue;
-    const bool total_within = c.rms <= none_noise_factor * c.noise || (c.tolerated > 0.0 && c.rms <= c.tolerated);
-    if (!total_within) return false;
+    if (!ordinary_in_total(c, c.rms, none_noise_factor)) return false;
     any = true;
   }
   return any;
@@ -530,13 +529,21 @@ void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resol
     if (slow != settings.tolerated_slow_by_channel.end()) {
       f.slow_tolerated = std::max(slow->second, settings.none_noise_factor * m.slow_noise);
     }
-    // Within the noise, the residual is ordinary whatever its parts. Within the model's error,
-    // it must be so in the slower part too.
-    const bool within_model_error =
-        f.tolerated > 0.0 && f.rms <= f.tolerated && (f.slow_tolerated == 0.0 || f.slow_rms <= f.slow_tolerated);
-    f.ordinary = f.rms <= settings.none_noise_factor * f.noise || within_model_error;
+    f.ordinary = is_ordinary(f, f.rms, f.slow_rms, settings.none_noise_factor);
     d.channels.push_back(std::move(f));
   }
+}
+
+bool is_ordinary(const ChannelFigures& f, double rms, double slow_rms, double none_noise_factor) {
+  // Within the noise, the residual is ordinary whatever its parts. Within the model's error, it
+  // must be so in the slower part too.
+  const bool within_model_error =
+      f.tolerated > 0.0 && rms <= f.tolerated && (f.slow_tolerated == 0.0 || slow_rms <= f.slow_tolerated);
+  return rms <= none_noise_factor * f.noise || within_model_error;
+}
+
+bool ordinary_in_total(const ChannelFigures& f, double rms, double none_noise_factor) {
+  return rms <= none_noise_factor * f.noise || (f.tolerated > 0.0 && rms <= f.tolerated);
 }
 
 bool set_verdict(Diagnosis& d, double none_noise_factor) {
@@ -583,8 +590,7 @@ bool set_verdict(Diagnosis& d, double none_noise_factor) {
                "against a calibration, slower than 2 s: " + figures + ") and no candidate improves the held-out fit";
   } else {
     d.verdict = "unexplained";
-    const bool total_beyond = unusual->rms > none_noise_factor * unusual->noise &&
-                              !(unusual->tolerated > 0.0 && unusual->rms <= unusual->tolerated);
+    const bool total_beyond = !ordinary_in_total(*unusual, unusual->rms, none_noise_factor);
     const std::string beyond = total_beyond ? format_g(none_noise_factor) + " x the noise" +
                                                   (unusual->tolerated > 0.0 ? " and what the calibration tolerates" : "")
                                             : "what the calibration tolerates in its part slower than 2 s";

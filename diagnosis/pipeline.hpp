@@ -288,6 +288,13 @@ std::string set_aside_reason(const EffectResult& effect, const SignificanceRule&
 void set_noise_figures(const std::vector<RecordingResiduals>& sets, double resolution, const PipelineSettings& settings,
                        Diagnosis& d);
 
+// The rule behind ChannelFigures::ordinary for a residual of `rms` in total and `slow_rms` in its
+// part slower than the fast band, against `f`'s noise and tolerances; and whether such a residual
+// is within the noise or the calibration's tolerance in total (beyond, if at all, only in its
+// slower part).
+bool is_ordinary(const ChannelFigures& f, double rms, double slow_rms, double none_noise_factor);
+bool ordinary_in_total(const ChannelFigures& f, double rms, double none_noise_factor);
+
 // Step 5's rule on per-recording estimates (nullopt for fewer than two).
 std::optional<FormCheck> check_form(const std::string& effect, std::vector<RecordingEstimate> estimates,
                                     const PipelineSettings& settings);

@@ -92,13 +92,9 @@ ChannelState state_of(const ChannelFigures& f, double none_noise_factor, const C
                       const ChannelSums& slow, double x) {
   const double n = fit.n + heldout.n;
   const double rms = n > 0.0 ? std::sqrt((fit.mse(x) * fit.n + heldout.mse(x) * heldout.n) / n) : 0.0;
-  const double slow_rms = std::sqrt(slow.mse(x));
-  const bool within_noise = rms <= none_noise_factor * f.noise;
-  const bool within_total = within_noise || (f.tolerated > 0.0 && rms <= f.tolerated);
-  const bool slow_within = f.slow_tolerated == 0.0 || slow_rms <= f.slow_tolerated;
   ChannelState s;
-  s.ordinary = within_noise || (f.tolerated > 0.0 && rms <= f.tolerated && slow_within);
-  s.only_slow_beyond = !s.ordinary && within_total;
+  s.ordinary = is_ordinary(f, rms, std::sqrt(slow.mse(x)), none_noise_factor);
+  s.only_slow_beyond = !s.ordinary && ordinary_in_total(f, rms, none_noise_factor);
   return s;
 }
 
