@@ -64,6 +64,11 @@ json thresholds_json(const Diagnosis& d) {
 }
 
 // "≤ −0.31 or ≥ 0.29 mm", "≤ 12 mm/s", "not within the catalog's range".
+// An effect's held-out score slower than 2 s, or "-" where the engine does not measure it.
+std::string slow_score_text(const EffectResult& e) {
+  return e.heldout_slow_cost_before > 0.0 ? format_figure(e.slow_score, 3) : "-";
+}
+
 std::string threshold_text(const DetectionThreshold& t) {
   std::string out;
   if (std::isfinite(t.below)) out += "<= " + format_g(t.below, 3);
@@ -227,7 +232,7 @@ std::string text_summary(const Diagnosis& d) {
   int width = 22;
   for (const auto& e : d.effects) width = std::max(width, static_cast<int>(e.name.size()));
   char line[320];
-  std::snprintf(line, sizeof line, "%-*s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, "effect", "score", "sig",
+  std::snprintf(line, sizeof line, "%-*s %7s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, "effect", "score", "slow", "sig",
                 "parameter", "Nrmse fit", "after", "held-out", "after", "dBIC");
   s << line;
   for (const auto& e : d.effects) {
@@ -238,8 +243,9 @@ std::string text_summary(const Diagnosis& d) {
     }
     const std::string p = format_estimate(e.parameter.value, e.parameter.std) + " " + e.parameter.unit;
     // An index that is not defined (Nrmse of a part whose levels do not vary) prints as "-".
-    std::snprintf(line, sizeof line, "%-*s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, e.name.c_str(),
-                  format_figure(e.score, 3).c_str(), e.significant ? "yes" : "", p.c_str(), format_figure(e.nrmse_before, 2).c_str(),
+    std::snprintf(line, sizeof line, "%-*s %7s %7s %4s %26s %9s %9s %9s %9s %8s\n", width, e.name.c_str(),
+                  format_figure(e.score, 3).c_str(), slow_score_text(e).c_str(), e.significant ? "yes" : "", p.c_str(),
+                  format_figure(e.nrmse_before, 2).c_str(),
                   format_figure(e.nrmse_after, 2).c_str(), format_figure(e.heldout_nrmse_before, 2).c_str(),
                   format_figure(e.heldout_nrmse_after, 2).c_str(), format_figure(e.delta_bic, 0).c_str());
     s << line;
@@ -323,11 +329,11 @@ std::string html_report(const Diagnosis& d, const std::string& title) {
   }
   s << "<p>Measurement noise " << format_figure(d.noise, 3) << " mm; nominal residual RMS " << format_figure(d.nominal_rms, 3)
     << " mm; a perfect model would reach Nrmse " << format_figure(d.noise_limit_nrmse, 1) << "%.</p>";
-  s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>parameter</th><th>Nrmse fitted</th>"
+  s << "<h2>Candidates</h2><table><tr><th>effect</th><th>score</th><th>score slower than 2 s</th><th>parameter</th><th>Nrmse fitted</th>"
        "<th>after</th><th>Nrmse held-out</th><th>after</th><th>&#916;BIC</th></tr>";
   for (const auto& e : d.effects) {
     s << "<tr" << (e.significant ? " class='sig'" : "") << "><td>" << html::escape(e.name) << "</td><td>" << format_figure(e.score, 3)
-      << "</td><td>" << html::escape(e.parameter.name) << " = " << html::escape(format_estimate(e.parameter.value, e.parameter.std))
+      << "</td><td>" << slow_score_text(e) << "</td><td>" << html::escape(e.parameter.name) << " = " << html::escape(format_estimate(e.parameter.value, e.parameter.std))
       << ' ' << html::escape(e.parameter.unit) << "</td><td>" << format_figure(e.nrmse_before, 2)
       << "</td><td>" << format_figure(e.nrmse_after, 2) << "</td><td>" << format_figure(e.heldout_nrmse_before, 2) << "</td><td>"
       << format_figure(e.heldout_nrmse_after, 2) << "</td><td>" << format_figure(e.delta_bic, 0) << "</td></tr>";
