@@ -216,15 +216,21 @@ UnexplainedResidual locate_unexplained(const std::vector<RecordingResiduals>& se
 std::string list_estimates(const FormCheck& f) {
   std::string out;
   for (const auto& e : f.estimates) {
-    out += (out.empty() ? "" : ", ") + e.recording + " " + format_estimate(e.parameter.value, e.parameter.std);
+    if (e.compared) out += (out.empty() ? "" : ", ") + e.recording + " " + format_estimate(e.parameter.value, e.parameter.std);
   }
   return out;
 }
 
-// "its fraction_of_inflow differs between them (op1 0.117 ± 0.002, op3 0.349 ± 0.003)"
+// "its fraction_of_inflow differs between them (op1 0.117 ± 0.002, op3 0.349 ± 0.003)", and the
+// recordings left out of the comparison.
 std::string differs(const EffectResult& e, const FormCheck& f) {
+  std::string left_out;
+  for (const auto& r : f.estimates) {
+    if (!r.compared) left_out += (left_out.empty() ? "" : ", ") + r.recording;
+  }
   return "fitted to each recording alone its " + e.parameter.name + " differs between them (" + list_estimates(f) +
-         (e.parameter.unit == std::string("-") ? "" : " " + e.parameter.unit) + ")";
+         (e.parameter.unit == std::string("-") ? "" : " " + e.parameter.unit) + ")" +
+         (left_out.empty() ? "" : "; not compared, where the model's error could move it further than the effect: " + left_out);
 }
 
 // Step 5, when the verdict's form does not hold: it explains the residual, but not as one
@@ -337,16 +343,27 @@ std::optional<FormCheck> check_form(const std::string& effect, std::vector<Recor
   FormCheck f;
   f.effect = effect;
   f.estimates = std::move(estimates);
-  const auto [low, high] = std::minmax_element(f.estimates.begin(), f.estimates.end(), [](const auto& a, const auto& b) {
-    return a.departure < b.departure;
+  double size = 0.0;  // the mean departure's magnitude: estimates of both signs have one too
+  for (const auto& e : f.estimates) size += std::abs(e.departure) / static_cast<double>(f.estimates.size());
+  std::vector<const RecordingEstimate*> compared;
+  for (auto& e : f.estimates) {
+    e.compared = e.model_error < settings.form_compared * size;
+    if (e.compared) compared.push_back(&e);
+  }
+  if (compared.size() < 2) {  // too few recordings show the effect above the model's error to judge its form
+    f.relative_spread = std::numeric_limits<double>::quiet_NaN();
+    return f;
+  }
+  const auto [low, high] = std::minmax_element(compared.begin(), compared.end(), [](const auto* a, const auto* b) {
+    return a->departure < b->departure;
   });
-  double mean = 0.0;
-  for (const auto& e : f.estimates) mean += e.departure / static_cast<double>(f.estimates.size());
-  const double spread = high->departure - low->departure;
-  f.relative_spread = mean != 0.0 ? spread / std::abs(mean) : std::numeric_limits<double>::quiet_NaN();
-  const double spread_std = std::hypot(low->departure_std, high->departure_std);
-  f.holds = !(spread > settings.form_spread * std::abs(mean) && spread > settings.form_z * spread_std &&
-              spread > settings.form_model_error * (low->model_error + high->model_error));
+  double compared_mean = 0.0;
+  for (const auto* e : compared) compared_mean += e->departure / static_cast<double>(compared.size());
+  const double spread = (*high)->departure - (*low)->departure;
+  f.relative_spread = compared_mean != 0.0 ? spread / std::abs(compared_mean) : std::numeric_limits<double>::quiet_NaN();
+  const double spread_std = std::hypot((*low)->departure_std, (*high)->departure_std);
+  f.holds = !(spread > settings.form_spread * std::abs(compared_mean) && spread > settings.form_z * spread_std &&
+              spread > settings.form_model_error * ((*low)->model_error + (*high)->model_error));
   return f;
 }
 

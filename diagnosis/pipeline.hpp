@@ -153,12 +153,16 @@ struct RecordingEstimate {
   // How far the model's own error could move the departure: the residual a calibration leaves on
   // its baseline, were it all along the effect's signature in this recording (0 uncalibrated).
   double model_error = 0.0;
+  // Whether the estimate took part in the comparison (check_form): the model's error could move
+  // it by less than the departures' mean size.
+  bool compared = true;
 };
 
 struct FormCheck {
   std::string effect;
   std::vector<RecordingEstimate> estimates;
-  // (largest − smallest departure) / |mean departure|; NaN when the mean departure is 0.
+  // (largest − smallest departure) / |mean departure| over the compared estimates; NaN when that
+  // mean is 0 or fewer than two are compared (the form then holds: nothing contradicts it).
   double relative_spread = 0.0;
   bool holds = true;
 };
@@ -259,9 +263,14 @@ struct PipelineSettings {
   // extremes apart (RecordingEstimate::model_error, a bound that puts the whole error along the
   // effect's signature). On realistic blind-test truths constant outflows of 3.7 and 12 % of the
   // inflow spread by 0.03 and 0.07 of that bound, seepages growing with the depth by 0.93 and 1.06.
+  // Only the estimates the model's error could move by less than form_compared times the mean
+  // size of the departures are compared: where it could move one further than the effect itself, the
+  // recording says nothing of the form (a leak at an opening where the gate's law is least
+  // alike between the model and the canal), and at least two must remain.
   double form_spread = 0.5;
   double form_z = 4.0;
   double form_model_error = 0.5;
+  double form_compared = 1.0;
 };
 
 // Runs the pipeline over `candidates` (names the explainer knows). An InputError propagates; any

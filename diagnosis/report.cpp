@@ -156,7 +156,7 @@ json to_json(const Diagnosis& d) {
     for (const auto& e : d.form->estimates) {
       estimates.push_back({{"recording", e.recording}, {"value", json_number(e.parameter.value)}, {"std", json_number(e.parameter.std)},
                            {"departure", json_number(e.departure)}, {"departure_std", json_number(e.departure_std)},
-                           {"model_error", json_number(e.model_error)}});
+                           {"model_error", json_number(e.model_error)}, {"compared", e.compared}});
     }
     out["form"] = {{"effect", d.form->effect}, {"holds", d.form->holds},
                    {"relative_spread", json_number(d.form->relative_spread)}, {"per_recording", estimates}};
@@ -213,7 +213,9 @@ std::string text_summary(const Diagnosis& d) {
   }
   if (d.form && d.form->holds) {
     s << d.form->effect << " fitted to each recording alone:";
-    for (const auto& e : d.form->estimates) s << "  " << e.recording << " " << format_estimate(e.parameter.value, e.parameter.std);
+    for (const auto& e : d.form->estimates) {
+      s << "  " << e.recording << " " << format_estimate(e.parameter.value, e.parameter.std) << (e.compared ? "" : " (not compared)");
+    }
     s << "  (one constant of the canal)\n";
   }
   if (d.unexplained) s << "where the unexplained residual lives: " << d.unexplained->summary << '\n';

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "diagnosis/blindtest.hpp"
 #include "diagnosis/calibrated.hpp"
@@ -177,6 +178,24 @@ TEST(FormAcrossRecordings, TheRuleNeedsASpreadBeyondItsShareItsDeviationsAndTheM
   EXPECT_FALSE(check_form("x", estimates(0.10, 0.20, 0.005, 0.09), settings)->holds);
   EXPECT_FALSE(check_form("x", {estimates(0.1, 0.2, 0.01).front()}, settings).has_value());
   EXPECT_FALSE(check_form("x", estimates(0.10, std::nan(""), 0.01), settings).has_value());
+
+  // A recording the model's error could move further than the effect says nothing of the form:
+  // a 1 mm leak of the second simulator fitted per recording against a calibration of its
+  // baseline (extra opening, its deviation, what the model's error could move it by).
+  const std::vector<RecordingEstimate> leak = {{"op1", {"leak", "mm", 1.000, 0.005}, 1.000, 0.005, 0.27},
+                                               {"op2", {"leak", "mm", 1.058, 0.008}, 1.058, 0.008, 0.40},
+                                               {"op3", {"leak", "mm", 0.627, 0.014}, 0.627, 0.014, 0.94},
+                                               {"op4", {"leak", "mm", 0.299, 0.011}, 0.299, 0.011, 0.98}};
+  const auto form = check_form("gate_leakage", leak, settings);
+  ASSERT_TRUE(form.has_value());
+  EXPECT_TRUE(form->holds);
+  EXPECT_TRUE(form->estimates[0].compared && form->estimates[1].compared);
+  EXPECT_FALSE(form->estimates[2].compared || form->estimates[3].compared);
+  PipelineSettings every_recording = settings;
+  every_recording.form_compared = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(check_form("gate_leakage", leak, every_recording)->holds);
+  // With fewer than two recordings left to compare, nothing contradicts the form.
+  EXPECT_TRUE(check_form("x", estimates(0.10, 0.20, 0.005, 0.5), settings)->holds);
 }
 
 // At one operating opening a leak (an extra opening δ) and a discharge coefficient (a factor on
