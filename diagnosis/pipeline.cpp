@@ -492,8 +492,11 @@ bool DetectionThreshold::reveals(double value) const {
 
 std::string set_aside_reason(const EffectResult& e, const SignificanceRule& rule) {
   std::vector<std::string> why;
-  if (!e.material) why.push_back("not material (" + e.parameter.name + " " + format_g(e.parameter.value, 3) +
-                                 " within the smallest change of interest or what the calibration leaves open)");
+  if (!e.material) {
+    why.push_back("not material (" + e.parameter.name + " " + format_g(e.parameter.value, 3) +
+                  " within the smallest change of interest, the calibrated model's own error or what the calibration "
+                  "leaves open)");
+  }
   if (e.score < rule.min_score) why.push_back("held-out score " + format_g(e.score, 2) + " < " + format_g(rule.min_score));
   if (-e.delta_bic < rule.min_bic_gain) {
     why.push_back("BIC gain " + format_g(-e.delta_bic, 3) + " < " + format_g(rule.min_bic_gain));

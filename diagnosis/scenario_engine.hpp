@@ -133,8 +133,12 @@ class Engine final : public Explainer {
   double parameter_std(const Effect& effect, const Point& best) const;
   // How far the calibration's residual on its baseline (DiagnoseOptions::baseline_rms_*) could
   // move θ, were it all along the effect's signature: |e| / |∂r/∂θ| (0 uncalibrated).
+  double model_error_energy() const;
   double model_error_theta(const Effect& effect, const Point& best) const;
   bool beyond_calibration(const Effect& effect, double parameter) const;
+  // Material: beyond the catalog's smallest change of interest or, against a calibration, beyond
+  // the model-error bound; and, where `within_calibration_counts`, beyond_calibration().
+  bool material(const Effect& effect, double parameter, bool within_calibration_counts) const;
   // The recorded level channels an effect reads: its own channel, or every level channel.
   std::vector<std::string> channels_of(const Effect& effect) const;
   double lattice_resolution(const std::vector<std::string>& channels) const;

@@ -8,13 +8,13 @@
 // effect by least squares on the fitted parts (the engine's weights) finds δ̂ = δ + Σw r0·m / Σw m²
 // and leaves r0 − (Σw r0·m / Σw m²) m, whatever δ. Each term is a sum over channels of the
 // quadratics Σ r0², Σ r0·m, Σ m², so the pipeline's own rule — held-out score on the
-// channel-balanced cost, BIC gain with the correlated-sample count, materiality beyond the
-// calibration's tolerance, a held-out fit that improves — is evaluated at any δ in closed form,
-// and the threshold is the smallest δ on each side that passes it. Step 4's second route is
-// evaluated the same way on the level channels' part slower than the fast band (a linear filter:
-// the slower part of r0 + δ m is that of r0 plus δ times that of m): a residual beyond the
-// calibration's tolerance only there, a candidate that passes the rule on that part's held-out
-// cost and leaves every level channel ordinary. Linear in θ: a first-order picture, which the
+// channel-balanced cost, BIC gain with the correlated-sample count, materiality (the catalog's
+// floor or the model-error bound) beyond the calibration's tolerance, a held-out fit that
+// improves — is evaluated at any δ in closed form, and the threshold is the smallest δ on each
+// side that passes it. Step 4's second route is evaluated the same way on the level channels'
+// part slower than the fast band (a linear filter: the slower part of r0 + δ m is that of r0 plus
+// δ times that of m): a residual beyond the calibration's tolerance only there, a candidate that
+// passes the rule on that part's held-out cost and leaves every level channel ordinary. Linear in θ: a first-order picture, which the
 // tests hold to "twice the threshold is named, half is not".
 #include <algorithm>
 #include <cmath>
@@ -150,6 +150,9 @@ DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& s
   double opening = 0.0;
   for (const auto& p : recs_) opening += p.operating_point_mm / static_cast<double>(recs_.size());
   const double open = o_.calibrated_z * calibration_uncertainty(effect, base_, o_.calibrated_std, opening);
+  // Engine::material's bound on what the calibrated model's own error could put on θ (none uncalibrated).
+  const double energy = model_error_energy();
+  const double model_error = energy > 0.0 ? std::sqrt(energy / wmm) : kNaN;
   // Step 4's second route: some level channel beyond only in its slower part, none beyond in
   // total; the fit leaves every level channel ordinary and reduces that part's held-out cost by
   // min_score.
@@ -175,7 +178,8 @@ DetectionThreshold Engine::threshold_of(const Effect& effect, const Signature& s
     const double score = held_before > 0.0 ? (held_before - held_after) / held_before : 0.0;
     const double bic = bic_change(n_eff, balanced_cost(sig.fit, delta, ref_fit), balanced_cost(sig.fit, -b, ref_fit));
     const double estimate = to_parameter(effect, k.theta_none + delta - b);
-    const bool material = is_material(effect, estimate) && (open == 0.0 || departure(effect, estimate) > open);
+    const bool material = (open == 0.0 || departure(effect, estimate) > open) &&
+                          (is_material(effect, estimate) || std::abs(delta - b) > model_error);
     // The held-out fit improves: on the primary channel, or on another level channel with the
     // primary no worse (judge_by_channel).
     const auto held = sig.heldout.find(o_.primary);

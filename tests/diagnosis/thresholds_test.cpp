@@ -5,11 +5,13 @@
 // not on the materiality floor alone. Its recordings are simulated once with ideal sensors; each
 // trial is what a logger writes of them with one instrument fault and its own noise
 // (blindtest.hpp as_logged). Against a calibration the same holds for an outflow, on a truth of
-// another scheme (the second simulator) that the calibration cannot represent exactly.
+// another scheme (the second simulator) that the calibration cannot represent exactly, and for a
+// rougher bed below the catalog's smallest change of interest.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -112,10 +114,31 @@ std::vector<Recording> second_simulator(const std::vector<ConcealedEffect>& conc
   return out;
 }
 
-TEST(Thresholds, AgainstACalibrationAnOutflowAtTwiceItsThresholdIsNamedAndAtHalfItIsNot) {
+// Three draws of the sensors' noise at each factor: `effect` at twice its threshold (reported on
+// clean recordings against the calibration) is named in all three, at half of it in none.
+void expect_twice_named_and_half_not(const calibration::Calibration& calibrated, const DiagnoseOptions& against,
+                                     const DetectionThreshold& t) {
+  int twice_named = 0, half_named = 0;
+  for (std::uint64_t seed = 500; seed < 530; seed += 10) {
+    for (const double factor : {2.0, 0.5}) {
+      const Diagnosis d =
+          diagnose(calibrated.calibrated, second_simulator({{t.effect, scaled(t, factor)}}, 0, seed), against);
+      ASSERT_TRUE(d.ok) << d.message;
+      std::cout << "[ thresholds ] " << t.effect << " at " << factor << " x: " << d.verdict << ": " << d.reason << "\n";
+      (factor > 1.0 ? twice_named : half_named) += d.verdict == t.effect;
+    }
+  }
+  EXPECT_EQ(twice_named, 3) << t.effect;
+  EXPECT_EQ(half_named, 0) << t.effect;
+}
+
+// Against a calibration the thresholds stand on the calibrated model's own error, not on the
+// catalog's smallest change of interest: a rougher bed is revealed well below the catalog's floor
+// (|ln m| >= 0.3, which stands for what an uncalibrated scenario may be off by).
+TEST(Thresholds, AgainstACalibrationAnOutflowOrARougherBedAtTwiceItsThresholdIsNamedAndAtHalfItIsNot) {
   const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
   BaselineOptions o;
-  o.diagnosis = among({"lateral_outflow", "gate_leakage", "sensor_offset[y_dwe_mm]"});
+  o.diagnosis = among({"lateral_outflow", "gate_leakage", "friction", "sensor_offset[y_dwe_mm]", "sensor_scale[y_dwe_mm]"});
   const calibration::Calibration calibrated =
       calibration::calibrate(lab, second_simulator({}, 1000, 300), {}, baseline_calibration_options(o));
   ASSERT_TRUE(calibrated.ok) << calibrated.message;
@@ -123,25 +146,21 @@ TEST(Thresholds, AgainstACalibrationAnOutflowAtTwiceItsThresholdIsNamedAndAtHalf
   const Diagnosis clean = diagnose(calibrated.calibrated, second_simulator({}, 0, 400), against);
   ASSERT_TRUE(clean.ok) << clean.message;
   EXPECT_EQ(clean.verdict, "none") << clean.reason;
-  const auto t = std::find_if(clean.thresholds.begin(), clean.thresholds.end(),
-                              [](const DetectionThreshold& x) { return x.effect == "lateral_outflow"; });
-  ASSERT_NE(t, clean.thresholds.end());
-  ASSERT_TRUE(std::isfinite(t->above));
-  std::cout << "[ thresholds ] against the calibration: lateral_outflow " << t->above << "\n";
-  // Three draws of the sensors' noise at each factor: twice the threshold is named in all three,
-  // half of it in none.
-  int twice_named = 0, half_named = 0;
-  for (std::uint64_t seed = 500; seed < 530; seed += 10) {
-    for (const double factor : {2.0, 0.5}) {
-      const Diagnosis d =
-          diagnose(calibrated.calibrated, second_simulator({{"lateral_outflow", factor * t->above}}, 0, seed), against);
-      ASSERT_TRUE(d.ok) << d.message;
-      std::cout << "[ thresholds ] at " << factor << " x: " << d.verdict << ": " << d.reason << "\n";
-      (factor > 1.0 ? twice_named : half_named) += d.verdict == "lateral_outflow";
-    }
-  }
-  EXPECT_EQ(twice_named, 3);
-  EXPECT_EQ(half_named, 0);
+  const auto threshold = [&](const std::string& effect) {
+    const auto t = std::find_if(clean.thresholds.begin(), clean.thresholds.end(),
+                                [&](const DetectionThreshold& x) { return x.effect == effect; });
+    const double none = std::numeric_limits<double>::quiet_NaN();
+    return t != clean.thresholds.end() ? *t : DetectionThreshold{effect, "", "", none, none};
+  };
+  const DetectionThreshold outflow = threshold("lateral_outflow"), friction = threshold("friction");
+  ASSERT_TRUE(std::isfinite(outflow.above));
+  ASSERT_TRUE(std::isfinite(friction.above));
+  std::cout << "[ thresholds ] against the calibration: lateral_outflow " << outflow.above << ", friction "
+            << friction.above << "\n";
+  const Effect rougher = *effect_from_name("friction");
+  EXPECT_LT(to_theta(rougher, friction.above), 0.5 * rougher.kind->material) << "friction's threshold " << friction.above;
+  expect_twice_named_and_half_not(calibrated, against, outflow);
+  expect_twice_named_and_half_not(calibrated, against, friction);
 }
 
 }  // namespace
