@@ -520,6 +520,7 @@ EffectResult Engine::judge(const Effect& effect, Point fitted, int sims) {
                     : !out.material ? "the recorded lattice is the modelled resolution"
                                     : "lattice coherence " + format_g(out.score, 2) + " < 0.9";
   }
+  judged_alone_[out.name] = {out.significant, out.score};
   return out;
 }
 

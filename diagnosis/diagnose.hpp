@@ -53,6 +53,11 @@ struct DiagnoseOptions {
   // required. A leak beside a discharge coefficient that is 11 % off removed 5.5 % of what the
   // coefficient left (BIC −233) and was dropped at 0.15 (docs/diagnosis.md).
   double added_min_score = 0.05;
+  // Step 5 skips the joint fit of a candidate whose first-order prospect, trusted, stays below
+  // half of added_min_score, unless it may be an ambiguous pair with the verdict
+  // (docs/diagnosis.md, "Several effects"). false: every candidate is fitted jointly (slower; the
+  // same explanation).
+  bool screen_joint_fits = true;
   double min_bic_gain = 10.0;    // BIC improvement on the fitted part; >= 0
   double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise; > 0
   int max_evaluations = 6;       // simulations per re-simulated candidate (secant steps); 2..50

@@ -125,6 +125,11 @@ class Engine final : public Explainer {
   // Explanations with several effects (joint_fit.cpp).
   struct JointFit;
   JointFit fit_jointly(std::vector<EffectAt> start, const std::vector<bool>& free);
+  double joint_prospect(const std::vector<EffectAt>& held, const std::vector<bool>& free, const Point& without,
+                        const Effect& added);
+  std::optional<JointExplanation> spared_joint_fit(const std::vector<ExplainedEffect>& explanation,
+                                                   const std::vector<EffectAt>& held, const std::vector<bool>& free,
+                                                   const Point& without, const Effect& added);
   std::optional<JointExplanation> explain_on_top(const std::vector<ExplainedEffect>& explanation,
                                                  const std::string& candidate) const;
   // |∂r/∂θ|² of the fitted-part residual vector: the secant between the estimate and the nominal
@@ -169,6 +174,12 @@ class Engine final : public Explainer {
   double inflation_ = 1.0;           // N / N_eff of the nominal primary residual
   std::size_t fit_samples_ = 0;
   std::map<std::string, Point> best_;
+  // Each candidate as judge() found it on its own: significant, and its held-out score.
+  struct JudgedAlone {
+    bool significant = false;
+    double score = 0.0;
+  };
+  std::map<std::string, JudgedAlone> judged_alone_;
   std::map<std::vector<std::pair<std::string, double>>, std::vector<Channels>> simulations_;  // simulated(): by effect and θ
   std::vector<std::string> level_channels_;
   int simulations_run_ = 0;          // replays of all recordings simulated() ran

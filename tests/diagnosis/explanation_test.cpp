@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <limits>
 
 #include "diagnosis/blindtest.hpp"
@@ -112,6 +113,30 @@ TEST(Explanation, AnEffectThatCounteractsTheVerdictIsFoundByTheJointFit) {
       EXPECT_LT(e.score, 0.05) << "alone, the outflow should explain nothing";
     }
   }
+}
+
+// Step 5 spares the joint fits whose first-order prospect cannot add (Engine::joint_prospect). The
+// explanation must be the one that fitting every candidate jointly gives, here where the added
+// effect has no score of its own and the other candidates really are fitted.
+TEST(Explanation, SparingTheJointFitsThatCannotAddLeavesTheExplanationAsItWas) {
+  const auto recordings = record({{"gate_leakage", 2.5}, {"lateral_outflow", 0.08}}, {"op1", "op2", "op3", "op4"});
+  DiagnoseOptions every = among({"gate_leakage", "lateral_outflow", "downstream_gate", "discharge_coefficient", "friction",
+                                 "command_offset", "level_datum", "sensor_offset[y_dw_mm]"});
+  DiagnoseOptions spared = every;
+  every.screen_joint_fits = false;
+  const Diagnosis all = diagnose(scenarios::builtin_scenario("lab"), recordings, every);
+  const Diagnosis some = diagnose(scenarios::builtin_scenario("lab"), recordings, spared);
+  ASSERT_TRUE(all.ok && some.ok) << all.message << some.message;
+  ASSERT_GE(all.explanation.size(), 2u) << all.reason;
+  ASSERT_EQ(some.explanation.size(), all.explanation.size());
+  for (std::size_t i = 0; i < all.explanation.size(); ++i) {
+    EXPECT_EQ(some.explanation[i].name, all.explanation[i].name);
+    EXPECT_NEAR(some.explanation[i].parameter.value, all.explanation[i].parameter.value,
+                1e-9 * std::max(1.0, std::abs(all.explanation[i].parameter.value)));
+  }
+  EXPECT_EQ(some.verdict, all.verdict);
+  EXPECT_EQ(some.ambiguous.size(), all.ambiguous.size());
+  std::cout << "[ spared ] every joint fit " << all.seconds << " s, the spared ones left out " << some.seconds << " s\n";
 }
 
 TEST(Explanation, OneEffectIsExplainedByItselfAlone) {
