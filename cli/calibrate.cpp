@@ -181,7 +181,7 @@ void add_calibrate_command(CLI::App& app) {
                   "(default 2; 0: the scenario's grid; docs/calibration.md)")
       ->check(integer_in(0, 3, "a number of refinements"));
   cmd->add_flag("--allow-long", args->allow_long,
-                "Run past the cost ceiling (1e10 cell updates over all replays; docs/scenarios.md)");
+                "Run past the cost ceiling (3e10 cell updates over all replays; docs/scenarios.md)");
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
                 "or four times its cells fit the recordings better (by default those are written; docs/calibration.md)");

@@ -140,7 +140,7 @@ void add_dambreak_command(CLI::App& app) {
   cmd->add_option("--time", args->time, "Simulated time [s]")->capture_default_str()->check(positive_number("a time in s"));
   cmd->add_flag("--dry", args->dry, "Dry bed downstream (Ritter) instead of 0.1 m (Stoker)");
   cmd->add_option("-o,--output", args->output, "CSV file to write")->capture_default_str();
-  cmd->add_flag("--allow-long", args->allow_long, "Run past the cost ceilings (1e10 cell updates, 2 GB)");
+  cmd->add_flag("--allow-long", args->allow_long, "Run past the cost ceilings (3e10 cell updates, 2 GB)");
   cmd->callback([args] { run_dambreak(args->cells, args->time, args->dry, args->output, args->allow_long); });
 }
 

@@ -289,7 +289,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_flag("--no-clock", args->no_clock,
                 "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
   cmd->add_flag("--allow-long", args->allow_long,
-                "--scenario: run past the cost ceiling (1e10 cell updates over all replays; docs/scenarios.md)");
+                "--scenario: run past the cost ceiling (3e10 cell updates over all replays; docs/scenarios.md)");
   cmd->callback([args, cmd] {
     for (const CLI::Option* option : cmd->get_options()) {
       if (option->count() > 0 && !option->get_lnames().empty()) args->flags_given.push_back("--" + option->get_lnames().front());

@@ -156,7 +156,7 @@ void add_simulate_command(CLI::App& app) {
                   "Directory for the recordings, created if missing; one NAME.csv each, '*' in NAME written "
                   "as 's' (op1* -> op1s.csv) (default: .)");
   cmd->add_flag("--allow-long", args->allow_long,
-                "Run past the cost ceilings (1e10 cell updates, 2 GB; docs/scenarios.md, \"Run cost\")");
+                "Run past the cost ceilings (3e10 cell updates, 2 GB; docs/scenarios.md, \"Run cost\")");
   cmd->add_option("--scheme", args->scheme,
                   "finite-volume: canalsim's model; staggered: a second simulator written apart from it (another scheme "
                   "and gate-law regularisation; one rectangular pool; docs/numerics.md), a truth to test fits against")
