@@ -68,6 +68,17 @@ void judge_by_channel(const Costs& without, const Costs& with, const std::string
   out.heldout_improves = after < before || (elsewhere && out.worsened.empty());
 }
 
+// A replay that ends `lookahead` samples after the fitted part: the simulation stops there.
+void end_after_fitted_part(Prepared& replay, std::size_t lookahead) {
+  const std::size_t n = std::min(replay.n, replay.n_fit + lookahead);
+  if (n == replay.n) return;
+  replay.n = n;
+  for (std::vector<double>* v : {&replay.t, &replay.u, &replay.regime}) {
+    if (v->size() > n) v->resize(n);
+  }
+  for (auto& [channel, y] : replay.data) y.resize(n);
+}
+
 }  // namespace
 
 void Engine::prepare() {
@@ -87,6 +98,14 @@ void Engine::prepare() {
   scale_ = std::move(w.scale);
   weight_ = std::move(w.weight);
   for (const auto& p : recs_) fit_samples_ += p.data.size() * p.n_fit;
+  // A reading delay of either sign reads the level |delay| later; an explanation may carry one
+  // and fit another, so a search replay runs twice the catalog's most negative delay, and a
+  // second, past the fitted part.
+  double ahead_s = 0.0;
+  for (const EffectKind& kind : catalog()) {
+    if (kind.search == Search::delay_grid) ahead_s = std::max(ahead_s, -kind.theta_low);
+  }
+  lookahead_ = static_cast<std::size_t>(std::ceil((2.0 * ahead_s + 1.0) / period_));
 }
 
 // The command effects an explanation carries edit the replays' drives; its reading effects the
@@ -311,11 +330,20 @@ std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Read
 // hydraulics again (Levenberg–Marquardt's accepted point, then its Jacobian; a sensor effect's
 // column). A bounded cache: it is emptied when full.
 const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydraulic) {
-  std::vector<std::pair<std::string, double>> key;
-  for (const auto& [effect, theta] : hydraulic) key.emplace_back(effect.name(), theta);
+  std::vector<std::pair<std::string, double>> effects;
+  for (const auto& [effect, theta] : hydraulic) effects.emplace_back(effect.name(), theta);
+  // A whole replay serves a search too.
+  if (const auto it = simulations_.find({effects, false}); it != simulations_.end()) return it->second;
+  const bool fitted_part_only = search_replays_ && o_.search_fitted_part_only;
+  auto key = std::make_pair(std::move(effects), fitted_part_only);
   if (const auto it = simulations_.find(key); it != simulations_.end()) return it->second;
-  constexpr std::size_t kKept = 24;
-  if (simulations_.size() >= kKept) simulations_.clear();
+  // Bounded: when full, the searches' partial replays go first (the whole ones serve the
+  // detection thresholds' signatures and the joint fits' columns), then everything.
+  constexpr std::size_t kKept = 48;
+  if (simulations_.size() >= kKept) {
+    std::erase_if(simulations_, [](const auto& entry) { return entry.first.second; });
+    if (simulations_.size() >= kKept) simulations_.clear();
+  }
   ++simulations_run_;
   std::vector<Channels> truth(recs_.size());
   parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
@@ -328,9 +356,26 @@ const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydr
         apply_effect(effect, to_parameter(effect, theta), s, inflow_m3s_[i]);
       }
     }
+    if (fitted_part_only) end_after_fitted_part(replay, lookahead_);
     truth[i] = simulate_true(s, replay);
   });
   return simulations_.emplace(std::move(key), std::move(truth)).first->second;
+}
+
+bool Engine::covers_heldout(const Point& p) const {
+  for (std::size_t i = 0; i < recs_.size(); ++i) {
+    const auto it = p.prediction.at(i).find(o_.primary);
+    if (it == p.prediction.at(i).end() || it->second.size() < recs_[i].n) return false;
+  }
+  return true;
+}
+
+Point Engine::replayed_whole(const std::vector<EffectAt>& effects, Point searched, Readings readings, int& sims) {
+  if (covers_heldout(searched)) return searched;
+  ++sims;
+  Point whole = evaluate(effects, readings);
+  whole.theta = searched.theta;
+  return whole;
 }
 
 Point Engine::evaluate(const std::vector<EffectAt>& effects, Readings readings) {

@@ -58,6 +58,12 @@ struct DiagnoseOptions {
   // (docs/diagnosis.md, "Several effects"). false: every candidate is fitted jointly (slower; the
   // same explanation).
   bool screen_joint_fits = true;
+  // A search (a re-simulated effect's secant or scan, a joint fit's Levenberg–Marquardt) compares
+  // its points by the fitted-part residual alone, and the solver is causal: its replays stop after
+  // the fitted part (and the lookahead a negative reading delay needs), and only the point it
+  // returns is replayed whole. false: every replay runs the whole recording (slower; the same
+  // result).
+  bool search_fitted_part_only = true;
   double min_bic_gain = 10.0;    // BIC improvement on the fitted part; >= 0
   double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise; > 0
   int max_evaluations = 6;       // simulations per re-simulated candidate (secant steps); 2..50

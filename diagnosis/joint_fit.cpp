@@ -169,13 +169,17 @@ Engine::JointFit Engine::fit_jointly(std::vector<EffectAt> start, const std::vec
   so.function_tolerance = 1e-4;
   so.parameter_tolerance = 1e-4;
   so.max_num_line_search_step_size_iterations = 0;  // as the calibration: no Jacobians at line-search points
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &lsq, &summary);
-
   JointFit out;
-  out.effects = effects_at(z);
+  std::vector<double> sd;
+  {
+    const SearchReplays search(*this);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &lsq, &summary);
+    out.effects = effects_at(z);
+    const std::vector<double> r = fit_residuals(predict(out.effects, kReadings));
+    sd = standard_deviations(cost.jacobian(z, r), r, z.size(), inflation_);
+  }
   out.point = evaluate(out.effects, kReadings);
-  const std::vector<double> sd = standard_deviations(cost.jacobian(z, out.point.r), out.point.r, z.size(), inflation_);
   out.std_theta.assign(start.size(), 0.0);
   for (std::size_t j = 0; j < index.size(); ++j) out.std_theta[index[j]] = sd[j];
   out.simulations = simulations_run_ - simulations_before;

@@ -103,6 +103,23 @@ class Engine final : public Explainer {
   SensorModel sensors_with(const std::vector<EffectAt>& effects, Readings readings) const;
   std::vector<Channels> predict(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
   const std::vector<Channels>& simulated(const std::vector<EffectAt>& hydraulic);
+  // A search compares its points by the fitted-part residual alone, so its replays may end after
+  // the fitted part (plus the lookahead a negative reading delay needs): half the work at the
+  // default fit_fraction. Within a SearchReplays scope they do (DiagnoseOptions::
+  // search_fitted_part_only); the point a search returns is replayed whole (replayed_whole) before
+  // anything judges it on the held-out part.
+  class SearchReplays {
+   public:
+    explicit SearchReplays(Engine& engine) : engine_(engine) { engine_.search_replays_ = true; }
+    ~SearchReplays() { engine_.search_replays_ = false; }
+    SearchReplays(const SearchReplays&) = delete;
+    SearchReplays& operator=(const SearchReplays&) = delete;
+
+   private:
+    Engine& engine_;
+  };
+  bool covers_heldout(const Point& p) const;
+  Point replayed_whole(const std::vector<EffectAt>& effects, Point searched, Readings readings, int& sims);
   // theta = the last effect's
   Point evaluate(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
   Point evaluate(const Effect& effect, double theta) { return evaluate({{effect, theta}}); }
@@ -180,7 +197,10 @@ class Engine final : public Explainer {
     double score = 0.0;
   };
   std::map<std::string, JudgedAlone> judged_alone_;
-  std::map<std::vector<std::pair<std::string, double>>, std::vector<Channels>> simulations_;  // simulated(): by effect and θ
+  // simulated(): by effect and θ, and whether the replays end after the fitted part
+  std::map<std::pair<std::vector<std::pair<std::string, double>>, bool>, std::vector<Channels>> simulations_;
+  bool search_replays_ = false;      // within a SearchReplays scope
+  std::size_t lookahead_ = 0;        // samples a search replay runs past the fitted part
   std::vector<std::string> level_channels_;
   int simulations_run_ = 0;          // replays of all recordings simulated() ran
 };

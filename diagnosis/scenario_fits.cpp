@@ -84,8 +84,10 @@ Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims)
   const EffectKind& e = *effect.kind;
   std::vector<Point> pts;
   pts.push_back(start);
+  // The probe is replayed whole: the effect's detection threshold reads its signature from it.
   pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
   ++sims;
+  const SearchReplays search(*this);
   const double tol = 2e-3 * (e.theta_high - e.theta_low);
   while (sims < o_.max_evaluations) {
     const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
@@ -317,7 +319,8 @@ Point Engine::fit(const Effect& effect, int& sims) {
   }
   Point start = nominal_point_;
   start.theta = effect.kind->theta_none;
-  return fit_by_secant(effect, start, sims);
+  Point searched = fit_by_secant(effect, start, sims);
+  return replayed_whole({{effect, searched.theta}}, std::move(searched), Readings::as_sensor, sims);
 }
 
 // From the recorded gate position when every recording has it, else by re-simulation.
@@ -362,7 +365,16 @@ Point Engine::rate_limit_from_levels(const Effect& rate_limit, int& sims) {
 Point Engine::fit_gate_rate_limit(const Effect& rate_limit, int& sims) {
   bool have_position = std::find(o_.channels.begin(), o_.channels.end(), columns::gate_position) != o_.channels.end();
   for (const auto& p : recs_) have_position = have_position && p.data.count(columns::gate_position) > 0;
-  Point best = have_position ? rate_limit_from_position(rate_limit, sims) : rate_limit_from_levels(rate_limit, sims);
+  Point best;
+  if (have_position) {
+    best = rate_limit_from_position(rate_limit, sims);
+  } else {
+    {
+      const SearchReplays search(*this);
+      best = rate_limit_from_levels(rate_limit, sims);
+    }
+    if (!std::isnan(best.theta)) best = replayed_whole({{rate_limit, best.theta}}, std::move(best), Readings::as_sensor, sims);
+  }
   if (std::isnan(best.theta)) best.theta = 0.0;
   return best;
 }

@@ -16,6 +16,7 @@
 #include "scenarios/builtin.hpp"
 #include "scenarios/outside_catalog.hpp"
 #include "scenarios/simulate.hpp"
+#include "scenarios/staggered.hpp"
 #include "tests/diagnosis/lab_recordings.hpp"
 
 namespace canalsim::diagnosis {
@@ -137,6 +138,49 @@ TEST(Explanation, SparingTheJointFitsThatCannotAddLeavesTheExplanationAsItWas) {
   EXPECT_EQ(some.verdict, all.verdict);
   EXPECT_EQ(some.ambiguous.size(), all.ambiguous.size());
   std::cout << "[ spared ] every joint fit " << all.seconds << " s, the spared ones left out " << some.seconds << " s\n";
+}
+
+// The searches' replays stop after the fitted part (DiagnoseOptions::search_fitted_part_only):
+// the solver is causal, so every fitted-part residual, and so every estimate, score and judgement,
+// must be what whole replays give. The truth is the second simulator (another scheme) with a
+// rougher bed and a y_dwe sensor that reads 0.8 s early, which the joint fit must read ahead
+// of the fitted part for.
+TEST(Explanation, SearchesThatReplayOnlyTheFittedPartChangeNothing) {
+  const scenarios::Scenario lab = scenarios::builtin_scenario("lab");
+  std::vector<Recording> recordings;
+  for (const char* name : {"op1", "op3"}) {
+    const scenarios::ExperimentSpec e = short_experiment(lab, name, 80.0, lab.sensors, 0.05, 23);
+    Recording r = simulate_concealed(lab, e, {{"friction", 1.4}, {"sensor_delay[y_dwe_mm]", -0.8}}, steady_inflow_m3s(lab, e),
+                                     settled_run(), scenarios::staggered_simulator());
+    r.source = std::string(name) + ".csv";
+    recordings.push_back(std::move(r));
+  }
+  DiagnoseOptions whole = among({"friction", "discharge_coefficient", "downstream_gate", "gate_rate_limit",
+                                 "sensor_delay[y_dwe_mm]", "sensor_offset[y_dwe_mm]"});
+  DiagnoseOptions fitted_part = whole;
+  whole.search_fitted_part_only = false;
+  const Diagnosis a = diagnose(lab, recordings, whole);
+  const Diagnosis b = diagnose(lab, recordings, fitted_part);
+  ASSERT_TRUE(a.ok && b.ok) << a.message << b.message;
+  ASSERT_EQ(a.effects.size(), b.effects.size());
+  const auto same = [](double x, double y) { return x == y || std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
+  for (const EffectResult& e : a.effects) {
+    const auto it = std::find_if(b.effects.begin(), b.effects.end(), [&](const EffectResult& f) { return f.name == e.name; });
+    ASSERT_NE(it, b.effects.end()) << e.name;
+    EXPECT_TRUE(same(it->score, e.score)) << e.name << ": " << it->score << " against " << e.score;
+    EXPECT_TRUE(same(it->parameter.value, e.parameter.value)) << e.name << ": " << it->parameter.value << " against " << e.parameter.value;
+    EXPECT_EQ(it->significant, e.significant) << e.name;
+  }
+  EXPECT_EQ(b.verdict, a.verdict);
+  ASSERT_EQ(b.explanation.size(), a.explanation.size());
+  for (std::size_t i = 0; i < a.explanation.size(); ++i) {
+    EXPECT_EQ(b.explanation[i].name, a.explanation[i].name);
+    EXPECT_TRUE(same(b.explanation[i].parameter.value, a.explanation[i].parameter.value)) << a.explanation[i].name;
+  }
+  // The case needs both: the bed found, and the early sensor beside it.
+  EXPECT_EQ(a.verdict, "friction") << a.reason;
+  EXPECT_NE(in_explanation(a, "sensor_delay[y_dwe_mm]"), nullptr) << a.reason;
+  std::cout << "[ fitted part ] whole replays " << a.seconds << " s, searches on the fitted part " << b.seconds << " s\n";
 }
 
 TEST(Explanation, OneEffectIsExplainedByItselfAlone) {
