@@ -184,7 +184,8 @@ void add_calibrate_command(CLI::App& app) {
                 "Run past the cost ceiling (3e10 cell updates over all replays; docs/scenarios.md)");
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
-                "or four times its cells fit the recordings better (by default those are written; docs/calibration.md)");
+                "or four times its cells fit the recordings better (by default those are written when they lower the cost by a "
+                "tenth; docs/calibration.md)");
   cmd->add_flag("--model-forms", args->model_forms,
                 "Then add each model-form choice left open (the head gate's zero-head regularisation, a time offset "
                 "between command and levels, the tail level) and refit from the estimates, on the scenario's grid and "

@@ -384,11 +384,10 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   for (const auto& p : refined.parameters) EXPECT_GT(p.grid_shift, 0.0) << p.name;
   // Written as `canalsim calibrate` writes it, the model holds the grid-converged estimates on
   // twice the cells only when they fit the fitted recordings better than the estimates on their
-  // own grid, and the note gives the costs compared. Here the two are within a hair of each other
-  // (measured: 0.0128 against 0.0128, the grid-converged model written; 0.0135 against 0.0128
-  // when the first grid runs to the precise tolerance instead of scouting), so either outcome
-  // obeys the rule;
-  // both are checked. (tests/cli/calibrate_test.cpp ARefinedGridIsWrittenIntoTheCalibratedScenario sees
+  // own grid by a tenth of the cost, and the note gives the costs compared. Here the two are
+  // within a hair of each other (measured: 0.0128 against 0.0128; 0.0135 against 0.0128 when the
+  // first grid runs to the precise tolerance instead of scouting), so the rule keeps the estimates'
+  // grid; either outcome is checked against the rule. (tests/cli/calibrate_test.cpp ARefinedGridIsWrittenIntoTheCalibratedScenario sees
   // the grid-converged model written on a clear case.)
   o.write_grid_converged = true;
   const Calibration written = calibrate(model(), fitted, other, o);
@@ -411,12 +410,12 @@ TEST(Calibrate, RefinesTheGridWhileTheDiscretisationLimitsTheFit) {
   if (written.written_grid_converged) {
     EXPECT_EQ(written.calibrated.pools.front().cells, 400);
     EXPECT_EQ(written.written_note.rfind("the grid-converged estimates on 400 cells (cost ", 0), 0u) << written.written_note;
-    EXPECT_LE(converged_cost, refined.cost_after * (1.0 + 0.005)) << written.written_note;
+    EXPECT_LE(converged_cost, 0.9 * refined.cost_after * (1.0 + 0.005)) << written.written_note;
   } else {
     EXPECT_EQ(written.calibrated.pools.front().cells, 200);
     EXPECT_EQ(written.written_note.rfind("the estimates on 200 cells (the grid-converged ones: cost ", 0), 0u)
         << written.written_note;
-    EXPECT_GE(converged_cost, refined.cost_after * (1.0 - 0.005)) << written.written_note;
+    EXPECT_GE(converged_cost, 0.9 * refined.cost_after * (1.0 - 0.005)) << written.written_note;
   }
 }
 
