@@ -244,6 +244,10 @@ double Engine::balanced_slow(const Costs& c) const { return balanced_over(c.mse_
 void Engine::simulate_nominal() {
   truth_.assign(recs_.size(), {});
   parallel_for(recs_.size(), o_.threads, [&](std::size_t i) { truth_[i] = simulate_true(scenario_for(i), recs_[i]); });
+  observe_nominal();
+}
+
+void Engine::observe_nominal() {
   nominal_.clear();
   inflow_m3s_.clear();
   for (std::size_t i = 0; i < recs_.size(); ++i) {
@@ -396,7 +400,8 @@ EffectResult Engine::explain(const std::string& candidate) {
     return out;
   }
   int sims = 0;
-  Point best = fit(effect, sims);
+  Point searched = fit(effect, sims);
+  Point best = replayed_whole({{effect, searched.theta}}, std::move(searched), Readings::as_sensor, sims);
   return judge(effect, std::move(best), sims);
 }
 
@@ -406,23 +411,33 @@ std::vector<RecordingEstimate> Engine::per_recording_estimates(const std::string
   std::vector<std::vector<Recording>> alone;
   for (const Recording& r : recordings_) alone.push_back({r});
   std::vector<RecordingEstimate> out(recordings_.size());
+  const bool fitted = unsupported_reason(effect, base_).empty();
   parallel_for(recordings_.size(), o_.threads, [&](std::size_t i) {
+    ParameterEstimate parameter;
+    parameter.name = effect.kind->parameter;
+    parameter.unit = effect.kind->unit;
+    if (!fitted) {  // the scenario cannot carry it: no estimate
+      const double none = std::numeric_limits<double>::quiet_NaN();
+      parameter.value = no_effect_parameter(effect);
+      out[i] = {recs_.at(i).name, parameter, none, none, none};
+      return;
+    }
+    // The engine of this recording alone. Its nominal replay is this engine's i-th, and an
+    // estimate needs the fitted part only: no replay is judged on the held-out part.
     Engine engine(base_, alone[i], o_);
     engine.carried_ = carried_;
     if (!carried_inflow_m3s_.empty()) engine.carried_inflow_m3s_ = {carried_inflow_m3s_.at(i)};
-    engine.nominal_residuals();
-    const EffectResult fitted = engine.explain(name);
-    const auto best = engine.best_.find(name);
-    if (best == engine.best_.end()) {  // not fitted (the scenario cannot carry it): no estimate
-      const double none = std::numeric_limits<double>::quiet_NaN();
-      out[i] = {recs_.at(i).name, fitted.parameter, none, none, none};
-      return;
-    }
-    const double theta = to_theta(effect, fitted.parameter.value);
-    const double per_theta = parameter_per_theta(effect, theta);
-    out[i] = {recs_.at(i).name, fitted.parameter, theta - effect.kind->theta_none,
-              per_theta > 0.0 ? fitted.parameter.std / per_theta : std::numeric_limits<double>::quiet_NaN(),
-              engine.model_error_theta(effect, best->second)};
+    engine.prepare();
+    engine.truth_ = {truth_.at(i)};
+    engine.observe_nominal();
+    int sims = 0;
+    const Point best = engine.fit(effect, sims);
+    parameter.value = to_parameter(effect, best.theta);
+    parameter.std = engine.parameter_std(effect, best);
+    const double per_theta = parameter_per_theta(effect, best.theta);
+    out[i] = {recs_.at(i).name, parameter, best.theta - effect.kind->theta_none,
+              per_theta > 0.0 ? parameter.std / per_theta : std::numeric_limits<double>::quiet_NaN(),
+              engine.model_error_theta(effect, best)};
   });
   return out;
 }

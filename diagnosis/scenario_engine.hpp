@@ -82,6 +82,7 @@ class Engine final : public Explainer {
   void prepare();
   void carry_command_and_reading_effects();
   void simulate_nominal();
+  void observe_nominal();  // the nominal figures from truth_
   const std::vector<Channels>& prediction_with(const std::string& effect) const;
   Costs costs(const std::vector<Channels>& prediction) const;
   // Channel-balanced cost: the mean over channels of MSE_c / MSE_c(nominal), each nominal MSE
@@ -125,7 +126,8 @@ class Engine final : public Explainer {
   Point evaluate(const Effect& effect, double theta) { return evaluate({{effect, theta}}); }
   std::vector<double> fit_residuals(const std::vector<Channels>& prediction) const;
 
-  // The fit of each catalog effect by its row's Search (the effect's parameter θ at its best point).
+  // The fit of each catalog effect by its row's Search (the effect's parameter θ at its best point;
+  // a re-simulated one's prediction may cover the fitted part only: replayed_whole).
   Point fit(const Effect& effect, int& sims);
   Point fit_median_offset(const Effect& effect);
   Point fit_delay_grid(const Effect& effect);

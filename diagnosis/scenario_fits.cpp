@@ -319,8 +319,7 @@ Point Engine::fit(const Effect& effect, int& sims) {
   }
   Point start = nominal_point_;
   start.theta = effect.kind->theta_none;
-  Point searched = fit_by_secant(effect, start, sims);
-  return replayed_whole({{effect, searched.theta}}, std::move(searched), Readings::as_sensor, sims);
+  return fit_by_secant(effect, start, sims);
 }
 
 // From the recorded gate position when every recording has it, else by re-simulation.
@@ -369,11 +368,8 @@ Point Engine::fit_gate_rate_limit(const Effect& rate_limit, int& sims) {
   if (have_position) {
     best = rate_limit_from_position(rate_limit, sims);
   } else {
-    {
-      const SearchReplays search(*this);
-      best = rate_limit_from_levels(rate_limit, sims);
-    }
-    if (!std::isnan(best.theta)) best = replayed_whole({{rate_limit, best.theta}}, std::move(best), Readings::as_sensor, sims);
+    const SearchReplays search(*this);
+    best = rate_limit_from_levels(rate_limit, sims);
   }
   if (std::isnan(best.theta)) best.theta = 0.0;
   return best;
