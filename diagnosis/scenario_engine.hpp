@@ -1,8 +1,9 @@
 // The scenario engine of the diagnosis (internal to diagnosis/): the Explainer (pipeline.hpp)
 // that replays the recordings through a scenario, fits each catalog effect by re-simulating (or,
 // for sensor effects, by re-observing the nominal simulation) and judges it on the held-out part
-// of every recording. diagnose.cpp holds the engine's core and its judgement; scenario_fits.cpp
-// the fit of each effect.
+// of every recording. diagnose.cpp holds the engine's core (replays, predictions, costs),
+// judging.cpp its judgement of a fitted effect, scenario_fits.cpp the fit of each effect,
+// joint_fit.cpp explanations of several effects and thresholds.cpp the detection thresholds.
 #pragma once
 
 #include <map>
