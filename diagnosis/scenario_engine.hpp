@@ -112,13 +112,16 @@ class Engine final : public Explainer {
   // anything judges it on the held-out part.
   class SearchReplays {
    public:
-    explicit SearchReplays(Engine& engine) : engine_(engine) { engine_.search_replays_ = true; }
-    ~SearchReplays() { engine_.search_replays_ = false; }
+    explicit SearchReplays(Engine& engine) : engine_(engine), outer_(engine.search_replays_) {
+      engine_.search_replays_ = true;
+    }
+    ~SearchReplays() { engine_.search_replays_ = outer_; }
     SearchReplays(const SearchReplays&) = delete;
     SearchReplays& operator=(const SearchReplays&) = delete;
 
    private:
     Engine& engine_;
+    bool outer_;  // an enclosing scope's setting, restored on leaving
   };
   bool covers_heldout(const Point& p) const;
   Point replayed_whole(const std::vector<EffectAt>& effects, Point searched, Readings readings, int& sims);
