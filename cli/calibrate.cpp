@@ -57,7 +57,8 @@ std::vector<Recording> read_all(const std::vector<std::string>& files, const Rec
 // A calibration replays each recording about 100 times on the scenario's grid (bench/README.md:
 // 400–500 simulations for four recordings), and each refinement about half as often again on twice
 // the cells, at four times the work a replay (half the cell size, half the time step). Refused
-// past the ceiling of one run (scenarios/run_cost.hpp), before any work, unless --allow-long.
+// past one run's ceiling on each thread the replays keep busy (scenarios/run_cost.hpp), before any
+// work, unless --allow-long.
 void check_calibration_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
                             const std::vector<Recording>& validation, const CalibrateArguments& args) {
   if (args.allow_long) return;
@@ -71,11 +72,12 @@ void check_calibration_cost(const scenarios::Scenario& s, const std::vector<Reco
       samples += rec.size();
     }
   }
-  if (updates <= scenarios::kMaxCellUpdates) return;
-  throw InputError("calibrate: replaying " + std::to_string(recordings.size() + validation.size()) + " recording(s) of " +
-                   std::to_string(samples) + " samples about " + format_g(100.0 * grid_factor, 3) + " times through " +
-                   s.name + " is about " + format_g(updates, 3) + " cell updates, expected at most " +
-                   format_g(scenarios::kMaxCellUpdates) +
+  const std::size_t parallel = recordings.size() + validation.size();
+  if (updates <= scenarios::replays_ceiling(args.threads, parallel)) return;
+  throw InputError("calibrate: replaying " + std::to_string(parallel) + " recording(s) of " + std::to_string(samples) +
+                   " samples about " + format_g(100.0 * grid_factor, 3) + " times through " + s.name + " is about " +
+                   format_g(updates, 3) + " cell updates, expected at most " +
+                   scenarios::replays_ceiling_text(args.threads, parallel) +
                    " (shorter recordings, --grid-refinements 0; or pass --allow-long)");
 }
 
@@ -181,7 +183,7 @@ void add_calibrate_command(CLI::App& app) {
                   "(default 2; 0: the scenario's grid; docs/calibration.md)")
       ->check(integer_in(0, 3, "a number of refinements"));
   cmd->add_flag("--allow-long", args->allow_long,
-                "Run past the cost ceiling (3e10 cell updates over all replays; docs/scenarios.md)");
+                "Run past the cost ceiling (3e10 cell updates per busy thread over all replays; docs/scenarios.md)");
   cmd->add_flag("--keep-grid", args->keep_grid,
                 "Write the estimates on the last grid calibrated on, even when the grid-converged estimates on twice "
                 "or four times its cells fit the recordings better (by default those are written when they lower the cost by a "

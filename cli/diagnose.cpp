@@ -137,10 +137,14 @@ int run_model(const DiagnoseArguments& args) {
 
 // A diagnosis replays every recording through the scenario about 1 + 5 times per candidate
 // effect (the progress budget of diagnosis::diagnose): its cost is that many runs of the
-// recording's length (scenarios/run_cost.hpp), refused above the same ceiling as one run.
+// recording's length (scenarios/run_cost.hpp), refused above one run's ceiling on each thread
+// the replays keep busy.
 void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Recording>& recordings,
                           const std::vector<Recording>& baseline, const DiagnoseArguments& args) {
   if (args.allow_long) return;
+  const std::size_t parallel = std::max(recordings.size(), baseline.size());
+  const double ceiling = scenarios::replays_ceiling(args.threads, parallel);
+  const std::string expected = "expected at most " + scenarios::replays_ceiling_text(args.threads, parallel);
   const double candidates = args.candidates.empty() ? 10.0 : static_cast<double>(args.candidates.size());
   double updates = 0.0;
   for (const Recording& rec : recordings) {
@@ -150,20 +154,19 @@ void check_diagnosis_cost(const scenarios::Scenario& s, const std::vector<Record
   // Levenberg–Marquardt iterations with a finite-difference Jacobian; bench/README.md).
   for (const Recording& rec : baseline) {
     const double cost = 100.0 * scenarios::estimate_replay_cost(s, rec).cell_updates;
-    if (updates + cost > scenarios::kMaxCellUpdates) {
+    if (updates + cost > ceiling) {
       throw InputError("diagnose: calibrating on the baseline replays " + rec.source + " (" + format_g(rec.size(), 3) +
                        " samples) about 100 times through " + s.name + ": with the diagnosis about " +
-                       format_g(updates + cost, 3) + " cell updates, expected at most " +
-                       format_g(scenarios::kMaxCellUpdates) + " (shorter recordings; or pass --allow-long)");
+                       format_g(updates + cost, 3) + " cell updates, " + expected +
+                       " (shorter recordings; or pass --allow-long)");
     }
     updates += cost;
   }
-  if (updates > scenarios::kMaxCellUpdates) {
+  if (updates > ceiling) {
     throw InputError("diagnose: replaying " + std::to_string(recordings.size()) + " recording(s) of " +
                      format_g(recordings.front().size(), 3) + "+ samples about " + format_g(1.0 + 5.0 * candidates) +
-                     " times each through " + s.name + " is about " + format_g(updates, 3) +
-                     " cell updates, expected at most " + format_g(scenarios::kMaxCellUpdates) +
-                     " (shorter recordings, fewer --candidates; or pass --allow-long)");
+                     " times each through " + s.name + " is about " + format_g(updates, 3) + " cell updates, " +
+                     expected + " (shorter recordings, fewer --candidates; or pass --allow-long)");
   }
 }
 
@@ -289,7 +292,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_flag("--no-clock", args->no_clock,
                 "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
   cmd->add_flag("--allow-long", args->allow_long,
-                "--scenario: run past the cost ceiling (3e10 cell updates over all replays; docs/scenarios.md)");
+                "--scenario: run past the cost ceiling (3e10 cell updates per busy thread over all replays; docs/scenarios.md)");
   cmd->callback([args, cmd] {
     for (const CLI::Option* option : cmd->get_options()) {
       if (option->count() > 0 && !option->get_lnames().empty()) args->flags_given.push_back("--" + option->get_lnames().front());

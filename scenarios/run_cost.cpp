@@ -18,7 +18,19 @@ constexpr double kBytesPerCell = 1000.0;
 // The second-order step's measured speed, one core (bench/README.md).
 constexpr double kCellUpdatesPerSecond = 1.0e8;
 
+double busy_threads(int threads, std::size_t recordings) {
+  return std::max(1.0, std::min(static_cast<double>(threads), static_cast<double>(recordings)));
+}
+
 }  // namespace
+
+double replays_ceiling(int threads, std::size_t recordings) { return kMaxCellUpdates * busy_threads(threads, recordings); }
+
+std::string replays_ceiling_text(int threads, std::size_t recordings) {
+  const double busy = busy_threads(threads, recordings);
+  return format_g(replays_ceiling(threads, recordings)) +
+         (busy > 1.0 ? " (" + format_g(kMaxCellUpdates) + " on each of " + format_g(busy) + " threads)" : std::string());
+}
 
 RunCost estimate_replay_cost(const Scenario& s, const Recording& recording) {
   ExperimentSpec replay;

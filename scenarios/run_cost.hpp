@@ -25,6 +25,12 @@ struct RunCost {
 // 10³–10⁵ cells), and 2 GB. `--allow-long` (SimulateOptions::allow_long_run) goes past them.
 inline constexpr double kMaxCellUpdates = 3.0e10;
 inline constexpr double kMaxMemoryBytes = 2.0e9;
+// The ceiling of a job that replays `recordings` independent recordings `threads` at a time
+// (calibrate, diagnose): one run's ceiling on each thread the replays keep busy, since the user
+// waits for the work shared among them.
+double replays_ceiling(int threads, std::size_t recordings);
+// "3e+10 (on each of 2 threads)": the ceiling as the refusals quote it.
+std::string replays_ceiling_text(int threads, std::size_t recordings);
 // Beyond this no flag helps: the sample count would not fit the index types.
 inline constexpr double kMaxSamples = 1.0e9;
 

@@ -43,6 +43,17 @@ TEST(RunCost, ARunAboveTheCeilingIsRefusedUnlessAllowed) {
   EXPECT_THROW(check_run_cost(lab, e, 1e-9, true), InputError);
 }
 
+// calibrate and diagnose replay their recordings on --threads threads: the user waits for the
+// work shared among the threads the recordings keep busy, so each has one run's ceiling.
+TEST(RunCost, AJobOfSeveralRecordingsHasOneRunsCeilingOnEachThreadItKeepsBusy) {
+  EXPECT_DOUBLE_EQ(replays_ceiling(2, 4), 2.0 * kMaxCellUpdates);
+  EXPECT_DOUBLE_EQ(replays_ceiling(4, 2), 2.0 * kMaxCellUpdates);  // two recordings busy two threads
+  EXPECT_DOUBLE_EQ(replays_ceiling(1, 4), kMaxCellUpdates);
+  EXPECT_DOUBLE_EQ(replays_ceiling(2, 0), kMaxCellUpdates);
+  EXPECT_EQ(replays_ceiling_text(2, 4), "6e+10 (3e+10 on each of 2 threads)");
+  EXPECT_EQ(replays_ceiling_text(1, 4), "3e+10");
+}
+
 // A pool narrower than its gate by 80 times makes the flow ~80 times faster than the estimate's
 // waves; the guard stops the run once its projected cost passes the ceiling.
 TEST(RunCost, TheGuardStopsARunWhoseStepCollapses) {
