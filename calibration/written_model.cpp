@@ -28,7 +28,8 @@ constexpr int kMostDoublings = 2;  // up to four times the last grid's cells
 // A finer grid is written only when it lowers that cost by a tenth: each doubling makes every
 // replay of the written model four times the work, and a diagnosis replays each recording ~50
 // times. On the second simulator's lab recordings of bench/README.md ("Diagnosis") 800 cells
-// lowered it by 0.8 % against the estimates on 400 and took the diagnosis from 10 s to 34 s.
+// lowered it by 0.8 % against the estimates on 400, and a diagnosis against them takes 34 s
+// where one against the 400 cells takes 10 s.
 constexpr double kWorthFinerGrid = 0.9;
 
 // The grid-converged estimates replayed on one finer grid (held by pointer: the problem refers to
