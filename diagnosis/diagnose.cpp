@@ -312,7 +312,8 @@ std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Read
 
 // The recordings replayed with hydraulic effects, kept by their θ: a joint fit asks for the same
 // hydraulics again (Levenberg–Marquardt's accepted point, then its Jacobian; a sensor effect's
-// column). A bounded cache: it is emptied when full.
+// column). Within a search (SearchReplays) the replays end after the fitted part, kept apart from
+// whole ones.
 const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydraulic) {
   std::vector<std::pair<std::string, double>> effects;
   for (const auto& [effect, theta] : hydraulic) effects.emplace_back(effect.name(), theta);
