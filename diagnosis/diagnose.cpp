@@ -407,6 +407,7 @@ std::vector<RecordingEstimate> Engine::per_recording_estimates(const std::string
     // estimate needs the fitted part only: no replay is judged on the held-out part.
     Engine engine(base_, alone[i], o_);
     engine.carried_ = carried_;
+    engine.screen_searches_ = false;
     if (!carried_inflow_m3s_.empty()) engine.carried_inflow_m3s_ = {carried_inflow_m3s_.at(i)};
     engine.prepare();
     engine.truth_ = {truth_.at(i)};

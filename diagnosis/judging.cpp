@@ -176,6 +176,11 @@ EffectResult Engine::judge(const Effect& effect, Point fitted, int sims) {
                     : !out.material ? "the recorded lattice is the modelled resolution"
                                     : "lattice coherence " + format_g(out.score, 2) + " < 0.9";
   }
+  if (const auto stopped = stopped_at_probe_.find(out.name); stopped != stopped_at_probe_.end() && !out.significant) {
+    out.set_aside += std::string(out.set_aside.empty() ? "" : "; ") + "its first-order prospect from the probe, a held-out score of " +
+                     format_g(stopped->second, 2) + ", is below " + format_g(kProspectShare * o_.min_score, 2) +
+                     ": searched no further";
+  }
   judged_alone_[out.name] = {out.significant, out.score};
   return out;
 }

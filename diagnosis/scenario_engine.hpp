@@ -6,6 +6,7 @@
 // joint_fit.cpp explanations of several effects and thresholds.cpp the detection thresholds.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -41,6 +42,15 @@ struct Costs {
   // (calibration::slower_than_fast_band), where a calibrated model's own error is small.
   std::map<std::string, double> mse_heldout_slow;
 };
+
+// A first-order prospect — the held-out score of the fitted-part residual's least-squares step,
+// linearised in the effects' parameters — stands in for a search only where it is trusted and
+// far below what the search must reach: the linearised fit is optimistic (it ignores the bounds),
+// so a candidate below kProspectShare of the score it needs has no chance.
+inline constexpr double kProspectShare = 0.5;
+// The linearised step is trusted within this many of its difference steps of every θ.
+inline constexpr double kProspectSteps = 1.5;
+inline constexpr double kCannotTell = std::numeric_limits<double>::infinity();  // a prospect that asks for the search
 
 // The floor of a channel's reference in the channel-balanced costs [its unit]: a channel the
 // nominal model already fits to within it weighs as if it missed by that much.
@@ -139,6 +149,10 @@ class Engine final : public Explainer {
   Point fit_lattice(const Effect& effect);
   Point fit_gate_rate_limit(const Effect& rate_limit, int& sims);
   Point fit_by_secant(const Effect& effect, const Point& start, int& sims);
+  // The held-out score, the larger of in total and slower than the fast band, of the fitted-part
+  // least-squares step along the signature between the nominal point and `probe`; kCannotTell
+  // beyond kProspectSteps probe steps.
+  double single_prospect(const Effect& effect, const Point& probe) const;
   Point rate_limit_from_position(const Effect& rate_limit, int& sims);
   Point rate_limit_from_levels(const Effect& rate_limit, int& sims);
   EffectResult unchanged(const Effect& effect, const Costs& model) const;
@@ -148,6 +162,7 @@ class Engine final : public Explainer {
   // Explanations with several effects (joint_fit.cpp).
   struct JointFit;
   JointFit fit_jointly(std::vector<EffectAt> start, const std::vector<bool>& free);
+  std::vector<Channels> added_on_top(const Point& without, const Effect& added, double step);
   double joint_prospect(const std::vector<EffectAt>& held, const std::vector<bool>& free, const Point& without,
                         const Effect& added);
   std::optional<JointExplanation> spared_joint_fit(const std::vector<ExplainedEffect>& explanation,
@@ -203,6 +218,11 @@ class Engine final : public Explainer {
     double score = 0.0;
   };
   std::map<std::string, JudgedAlone> judged_alone_;
+  // The searches stopped at their probe (DiagnoseOptions::screen_single_fits), by candidate: the
+  // prospect that stopped them. An engine that fits one recording alone for an estimate searches
+  // every candidate to its best point.
+  std::map<std::string, double> stopped_at_probe_;
+  bool screen_searches_ = true;
   // simulated(): by effect and θ, and whether the replays end after the fitted part
   std::map<std::pair<std::vector<std::pair<std::string, double>>, bool>, std::vector<Channels>> simulations_;
   bool search_replays_ = false;      // within a SearchReplays scope

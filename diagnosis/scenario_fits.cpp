@@ -87,6 +87,18 @@ Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims)
   // The probe is replayed whole: the effect's detection threshold reads its signature from it.
   pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
   ++sims;
+  const auto best_seen = [&pts] {
+    return *std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
+  };
+  if (o_.screen_single_fits && screen_searches_) {
+    // Most candidates explain nothing of a residual: their steps and final replay, each a
+    // replay of every recording, are spared where the probe already shows it to first order.
+    const double prospect = single_prospect(effect, pts.back());
+    if (prospect < kProspectShare * o_.min_score) {
+      stopped_at_probe_[effect.name()] = prospect;
+      return best_seen();
+    }
+  }
   const SearchReplays search(*this);
   const double tol = 2e-3 * (e.theta_high - e.theta_low);
   while (sims < o_.max_evaluations) {
@@ -116,8 +128,34 @@ Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims)
     pts.push_back(evaluate(effect, next));
     ++sims;
   }
-  const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
-  return *best;
+  return best_seen();
+}
+
+double Engine::single_prospect(const Effect& effect, const Point& probe) const {
+  const double step = probe.theta - effect.kind->theta_none;
+  if (step == 0.0) return kCannotTell;
+  double jj = 0.0, jr = 0.0;
+  for (std::size_t k = 0; k < probe.r.size(); ++k) {
+    const double j = (probe.r[k] - nominal_point_.r[k]) / step;
+    jj += j * j;
+    jr += j * nominal_point_.r[k];
+  }
+  if (!(jj > 0.0)) return kCannotTell;
+  const double delta = -jr / jj;
+  if (std::abs(delta) > kProspectSteps * std::abs(step)) return kCannotTell;
+  // The prediction moved along the signature by the step, channel by channel, sample by sample.
+  std::vector<Channels> moved = nominal_;
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    for (auto& [channel, y] : moved[i]) {
+      const auto at_probe = probe.prediction.at(i).find(channel);
+      if (at_probe == probe.prediction.at(i).end() || at_probe->second.size() < y.size()) return kCannotTell;
+      for (std::size_t n = 0; n < y.size(); ++n) y[n] += delta / step * (at_probe->second[n] - y[n]);
+    }
+  }
+  const Costs after = costs(moved);
+  const auto score = [](double before, double after_step) { return before > 0.0 ? (before - after_step) / before : 0.0; };
+  return std::max(score(balanced(nominal_costs_, true), balanced(after, true)),
+                  score(balanced_slow(nominal_costs_), balanced_slow(after)));
 }
 
 // The rate limit shows directly in the recorded gate position: fit the actuator speed to x_up
@@ -340,9 +378,15 @@ Point Engine::rate_limit_from_levels(const Effect& rate_limit, int& sims) {
   };
   std::vector<double> speeds;
   for (double v = 40.0; v >= 1.0; v /= 2.0) speeds.push_back(v);
+  // From the fastest speed down, the cost falls towards the actuator's speed and rises beyond it:
+  // once it has risen twice in succession the best speed lies behind (an ideal gate's cost rises
+  // from the first slow speed on, and the slowest ones, the most distorted, are not replayed).
   std::size_t best = 0;
-  for (std::size_t i = 0; i < speeds.size(); ++i) {
-    if (at(1.0 / speeds[i]).cost < at(1.0 / speeds[best]).cost) best = i;
+  int rises = 0;
+  for (std::size_t i = 0; i < speeds.size() && rises < 2; ++i) {
+    const double cost = at(1.0 / speeds[i]).cost;
+    if (i > 0) rises = cost > at(1.0 / speeds[i - 1]).cost ? rises + 1 : 0;
+    if (cost < at(1.0 / speeds[best]).cost) best = i;
   }
   if (nominal_point_.cost <= at(1.0 / speeds[best]).cost) return nominal_point_;
   double a = std::log(speeds[std::min(best + 1, speeds.size() - 1)]), b = std::log(speeds[best > 0 ? best - 1 : 0]);
