@@ -58,9 +58,9 @@ struct DiagnoseOptions {
   // (docs/diagnosis.md, "Several effects"). false: every candidate is fitted jointly (slower; the
   // same explanation).
   bool screen_joint_fits = true;
-  // Step 3 stops the search of a re-simulated candidate at its probe when the first-order
+  // Step 2 stops the search of a re-simulated candidate at its probe when the first-order
   // prospect from the probe, trusted, stays below half of min_score in total and slower than the
-  // fast band (docs/diagnosis.md, "Fitting each candidate"). false: every candidate is searched to
+  // fast band (docs/diagnosis.md §4, the secant search). false: every candidate is searched to
   // its best point (slower; the same verdict).
   bool screen_single_fits = true;
   // A search (a re-simulated effect's secant or scan, a joint fit's Levenberg–Marquardt) compares
