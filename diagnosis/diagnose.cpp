@@ -198,6 +198,19 @@ Costs Engine::costs(const std::vector<Channels>& prediction) const {
 
 double cost_reference_floor(const std::string& channel) { return channel == columns::discharge ? 0.003 : 0.03; }
 
+std::vector<Channels> moved_along(std::vector<Channels> prediction, const std::vector<SignatureMove>& moves) {
+  for (std::size_t i = 0; i < prediction.size(); ++i) {
+    for (auto& [channel, y] : prediction[i]) {
+      for (const SignatureMove& m : moves) {
+        const std::vector<double>& to = m.to.at(i).at(channel);
+        const std::vector<double>& from = m.from.at(i).at(channel);
+        for (std::size_t n = 0; n < y.size(); ++n) y[n] += m.per_unit * (to[n] - from[n]);
+      }
+    }
+  }
+  return prediction;
+}
+
 namespace {
 
 // mean_c MSE_c / max(reference_c, floor_c²) over the channels of `mse`.

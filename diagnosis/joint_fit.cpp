@@ -191,15 +191,7 @@ std::vector<Channels> Engine::added_on_top(const Point& without, const Effect& a
   const double probe = std::clamp(k.theta_none + k.theta_probe, k.theta_low, k.theta_high) - k.theta_none;
   const std::vector<Channels> probed = predict({{added, k.theta_none + probe}}, kReadings);
   const std::vector<Channels> nominal = predict({}, kReadings);
-  std::vector<Channels> out = without.prediction;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    for (auto& [channel, y] : out[i]) {
-      const std::vector<double>& at_probe = probed[i].at(channel);
-      const std::vector<double>& at_none = nominal[i].at(channel);
-      for (std::size_t n = 0; n < y.size(); ++n) y[n] += step / probe * (at_probe[n] - at_none[n]);
-    }
-  }
-  return out;
+  return moved_along(without.prediction, {{probed, nominal, step / probe}});
 }
 
 // The held-out score the joint fit of `added` with the explanation `held` (at `without`) would
@@ -261,18 +253,12 @@ double Engine::joint_prospect(const std::vector<EffectAt>& held, const std::vect
   // 1.43 differences by it, and its prospect fell short where the joint fit names the leak.
   if (transferred && std::abs(delta(cols - 1)) > 0.5 * kProspectSteps * std::abs(steps.back())) return kCannotTell;
 
-  // The prediction moved by the step, channel by channel, sample by sample.
-  std::vector<Channels> moved = without.prediction;
-  for (std::size_t i = 0; i < moved.size(); ++i) {
-    for (auto& [channel, y] : moved[i]) {
-      for (std::size_t j = 0; j < moved_predictions.size(); ++j) {
-        const std::vector<double>& y_j = moved_predictions[j][i].at(channel);
-        const std::vector<double>& y_0 = without.prediction[i].at(channel);
-        const double per_theta = delta(static_cast<Eigen::Index>(j)) / steps[j];
-        for (std::size_t n = 0; n < y.size(); ++n) y[n] += per_theta * (y_j[n] - y_0[n]);
-      }
-    }
+  // The prediction moved by the step.
+  std::vector<SignatureMove> step_moves;
+  for (std::size_t j = 0; j < moved_predictions.size(); ++j) {
+    step_moves.push_back({moved_predictions[j], without.prediction, delta(static_cast<Eigen::Index>(j)) / steps[j]});
   }
+  const std::vector<Channels> moved = moved_along(without.prediction, step_moves);
   const double before = balanced(costs(without.prediction), true), after = balanced(costs(moved), true);
   return before > 0.0 ? (before - after) / before : 0.0;
 }

@@ -52,6 +52,16 @@ inline constexpr double kProspectShare = 0.5;
 inline constexpr double kProspectSteps = 1.5;
 inline constexpr double kCannotTell = std::numeric_limits<double>::infinity();  // a prospect that asks for the search
 
+// A prediction moved to first order along signatures: each move adds per_unit × (to − from),
+// channel by channel, sample by sample (over the channels of the moved prediction, which every
+// `to` and `from` must cover).
+struct SignatureMove {
+  const std::vector<Channels>& to;
+  const std::vector<Channels>& from;
+  double per_unit;
+};
+std::vector<Channels> moved_along(std::vector<Channels> prediction, const std::vector<SignatureMove>& moves);
+
 // The floor of a channel's reference in the channel-balanced costs [its unit]: a channel the
 // nominal model already fits to within it weighs as if it missed by that much.
 double cost_reference_floor(const std::string& channel);

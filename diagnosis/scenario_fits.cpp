@@ -142,17 +142,8 @@ double Engine::single_prospect(const Effect& effect, const Point& probe) const {
   }
   if (!(jj > 0.0)) return kCannotTell;
   const double delta = -jr / jj;
-  if (std::abs(delta) > kProspectSteps * std::abs(step)) return kCannotTell;
-  // The prediction moved along the signature by the step, channel by channel, sample by sample.
-  std::vector<Channels> moved = nominal_;
-  for (std::size_t i = 0; i < moved.size(); ++i) {
-    for (auto& [channel, y] : moved[i]) {
-      const auto at_probe = probe.prediction.at(i).find(channel);
-      if (at_probe == probe.prediction.at(i).end() || at_probe->second.size() < y.size()) return kCannotTell;
-      for (std::size_t n = 0; n < y.size(); ++n) y[n] += delta / step * (at_probe->second[n] - y[n]);
-    }
-  }
-  const Costs after = costs(moved);
+  if (std::abs(delta) > kProspectSteps * std::abs(step) || !covers_heldout(probe)) return kCannotTell;
+  const Costs after = costs(moved_along(nominal_, {{probe.prediction, nominal_, delta / step}}));
   const auto score = [](double before, double after_step) { return before > 0.0 ? (before - after_step) / before : 0.0; };
   return std::max(score(balanced(nominal_costs_, true), balanced(after, true)),
                   score(balanced_slow(nominal_costs_), balanced_slow(after)));
