@@ -48,6 +48,7 @@ struct DiagnoseArguments {
   bool recorded_upstream = false;
   bool no_clock = false;
   bool allow_long = false;
+  int search_cells = diagnosis::DiagnoseOptions{}.search_max_cells;
   std::vector<std::string> flags_given;  // the flags the user typed, for check_flags_apply
   RecordingFormat format;
 };
@@ -177,6 +178,7 @@ diagnosis::DiagnoseOptions diagnose_options(const DiagnoseArguments& args) {
   options.threads = args.threads;
   options.use_recorded_upstream = args.recorded_upstream;
   options.reconstruct_clock = !args.no_clock;
+  options.search_max_cells = args.search_cells;
   return options;
 }
 
@@ -212,7 +214,7 @@ int run_with_baseline(const scenarios::Scenario& s, const std::vector<Recording>
 
 // A flag of the other mode would be ignored without a word: refuse it.
 void check_flags_apply(const DiagnoseArguments& args) {
-  const std::vector<std::string> scenario_only = {"--baseline", "--recorded-upstream", "--no-clock", "--allow-long"};
+  const std::vector<std::string> scenario_only = {"--baseline", "--recorded-upstream", "--no-clock", "--allow-long", "--search-cells"};
   const std::vector<std::string> model_only = {"--quantum", "--gate-speed", "--upstream-level"};
   const bool model = !args.model.empty();
   for (const std::string& flag : args.flags_given) {
@@ -291,6 +293,11 @@ void add_diagnose_command(CLI::App& app) {
                 "Drive the head gate with the recorded y_up_mm instead of the scenario's upstream model");
   cmd->add_flag("--no-clock", args->no_clock,
                 "Replay the sampled command as sampled (no reconstruction of a PRBS clock)");
+  cmd->add_option("--search-cells", args->search_cells,
+                  "--scenario: searches replay on the scenario's grid halved until it has at most this many cells, corrected by "
+                  "the nominal model's difference between the grids; judged points replay on the scenario's grid (default 200; "
+                  "0 = every replay on the scenario's grid)")
+      ->check(integer_in(0, 1000000, "a number of cells"));
   cmd->add_flag("--allow-long", args->allow_long,
                 "--scenario: run past the cost ceiling (3e10 cell updates per busy thread over all replays; docs/scenarios.md)");
   cmd->callback([args, cmd] {

@@ -17,6 +17,7 @@
 #include "diagnosis/calibrated.hpp"
 #include "diagnosis/scenario_engine.hpp"
 #include "reduced_models/metrics.hpp"
+#include "scenarios/variation.hpp"
 
 namespace canalsim::diagnosis {
 calibration::ReplayOptions diagnosis_replay(const DiagnoseOptions& o) {
@@ -86,6 +87,14 @@ void Engine::prepare() {
     if (kind.search == Search::delay_grid) ahead_s = std::max(ahead_s, -kind.theta_low);
   }
   lookahead_ = static_cast<std::size_t>(std::ceil((2.0 * ahead_s + 1.0) / period_));
+  // The search grid: halved while it has more than search_max_cells and every pool keeps cells
+  // to halve.
+  int fewest = std::numeric_limits<int>::max();
+  for (const auto& pool : base_.pools) fewest = std::min(fewest, pool.cells);
+  while (o_.search_max_cells > 0 && scenarios::total_cells(base_) > o_.search_max_cells * search_divisor_ &&
+         fewest >= 8 * search_divisor_) {
+    search_divisor_ *= 2;
+  }
 }
 
 // The command effects an explanation carries edit the replays' drives; its reading effects the
@@ -325,27 +334,30 @@ std::vector<Channels> Engine::predict(const std::vector<EffectAt>& effects, Read
 
 // The recordings replayed with hydraulic effects, kept by their θ: a joint fit asks for the same
 // hydraulics again (Levenberg–Marquardt's accepted point, then its Jacobian; a sensor effect's
-// column). Within a search (SearchReplays) the replays end after the fitted part, kept apart from
-// whole ones.
+// column). Replays on the search grid and those that end after the fitted part (ReplayScope) are
+// kept apart from the scenario's whole ones.
 const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydraulic) {
   std::vector<std::pair<std::string, double>> effects;
   for (const auto& [effect, theta] : hydraulic) effects.emplace_back(effect.name(), theta);
-  // A whole replay serves a search too.
-  if (const auto it = simulations_.find({effects, false}); it != simulations_.end()) return it->second;
-  const bool fitted_part_only = search_replays_ && o_.search_fitted_part_only;
-  auto key = std::make_pair(std::move(effects), fitted_part_only);
+  const bool search_grid = on_search_grid();
+  const bool fitted_part_only = replays_ == Replays::search && o_.search_fitted_part_only;
+  // A whole replay serves a search on the same grid too: the points a search compares are all of
+  // one grid.
+  if (const auto it = simulations_.find({effects, search_grid, false}); it != simulations_.end()) return it->second;
+  SimulationKey key{std::move(effects), search_grid, fitted_part_only};
   if (const auto it = simulations_.find(key); it != simulations_.end()) return it->second;
   // Bounded: when full, the searches' partial replays go first (the whole ones serve the
   // detection thresholds' signatures and the joint fits' columns), then everything.
   constexpr std::size_t kKept = 48;
   if (simulations_.size() >= kKept) {
-    std::erase_if(simulations_, [](const auto& entry) { return entry.first.second; });
+    std::erase_if(simulations_, [](const auto& entry) { return std::get<2>(entry.first); });
     if (simulations_.size() >= kKept) simulations_.clear();
   }
+  if (search_grid && grid_correction_.empty()) correct_for_search_grid();
   ++simulations_run_;
   std::vector<Channels> truth(recs_.size());
   parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
-    Scenario s = scenario_for(i);
+    Scenario s = search_grid ? scenarios::with_cells_divided(scenario_for(i), search_divisor_) : scenario_for(i);
     Prepared replay = recs_[i];
     for (const auto& [effect, theta] : hydraulic) {
       if (effect.kind->acts == Acts::command) {
@@ -356,8 +368,39 @@ const std::vector<Channels>& Engine::simulated(const std::vector<EffectAt>& hydr
     }
     if (fitted_part_only) end_after_fitted_part(replay, lookahead_);
     truth[i] = simulate_true(s, replay);
+    if (search_grid) {
+      for (auto& [channel, y] : truth[i]) {
+        const std::vector<double>& correction = grid_correction_[i].at(channel);
+        for (std::size_t k = 0; k < y.size(); ++k) y[k] += correction.at(k);
+      }
+    }
   });
   return simulations_.emplace(std::move(key), std::move(truth)).first->second;
+}
+
+void Engine::describe(Diagnosis& d) const {
+  d.channel_scale = scale_;
+  d.model_cells = scenarios::total_cells(base_);
+  d.search_cells = scenarios::total_cells(scenarios::with_cells_divided(base_, search_divisor_));
+}
+
+// Defect correction between grids: a search replay on the coarse grid plus (nominal on the
+// scenario's grid − nominal on the coarse grid) equals the scenario's grid exactly at the nominal
+// point and, as a search moves away from it, is off only by how much the grid's own error changes
+// with the effect — second order in the cell size and the effect together.
+void Engine::correct_for_search_grid() {
+  ++simulations_run_;
+  grid_correction_.assign(recs_.size(), {});
+  parallel_for(recs_.size(), o_.threads, [&](std::size_t i) {
+    const Prepared& replay = recs_[i];
+    const Channels coarse = simulate_true(scenarios::with_cells_divided(scenario_for(i), search_divisor_), replay);
+    for (const auto& [channel, y] : coarse) {
+      const std::vector<double>& fine = truth_.at(i).at(channel);
+      std::vector<double>& correction = grid_correction_[i][channel];
+      correction.resize(y.size());
+      for (std::size_t k = 0; k < y.size(); ++k) correction[k] = fine.at(k) - y[k];
+    }
+  });
 }
 
 bool Engine::covers_heldout(const Point& p) const {
@@ -369,7 +412,7 @@ bool Engine::covers_heldout(const Point& p) const {
 }
 
 Point Engine::replayed_whole(const std::vector<EffectAt>& effects, Point searched, Readings readings, int& sims) {
-  if (covers_heldout(searched)) return searched;
+  if (covers_heldout(searched) && !searched.on_search_grid) return searched;
   ++sims;
   Point whole = evaluate(effects, readings);
   whole.theta = searched.theta;
@@ -380,6 +423,9 @@ Point Engine::evaluate(const std::vector<EffectAt>& effects, Readings readings) 
   Point p;
   p.theta = effects.empty() ? std::numeric_limits<double>::quiet_NaN() : effects.back().theta;
   p.prediction = predict(effects, readings);
+  p.on_search_grid = on_search_grid() && std::any_of(effects.begin(), effects.end(), [](const EffectAt& e) {
+                       return e.effect.kind->acts != Acts::readings;
+                     });
   p.r = fit_residuals(p.prediction);
   p.cost = std::inner_product(p.r.begin(), p.r.end(), p.r.begin(), 0.0) / static_cast<double>(std::max<std::size_t>(fit_samples_, 1));
   return p;
@@ -395,6 +441,13 @@ EffectResult Engine::explain(const std::string& candidate) {
   }
   int sims = 0;
   Point searched = fit(effect, sims);
+  // A search stopped at its probe is judged there, on the search grid: its prospect showed that
+  // it cannot reach significance. Should the judgement find it significant after all, its point
+  // is replayed on the scenario's grid and judged again.
+  if (stopped_at_probe_.count(effect.name())) {
+    EffectResult at_probe = judge(effect, searched, sims);
+    if (!at_probe.significant || !searched.on_search_grid) return at_probe;
+  }
   Point best = replayed_whole({{effect, searched.theta}}, std::move(searched), Readings::as_sensor, sims);
   return judge(effect, std::move(best), sims);
 }
@@ -424,6 +477,7 @@ std::vector<RecordingEstimate> Engine::per_recording_estimates(const std::string
     if (!carried_inflow_m3s_.empty()) engine.carried_inflow_m3s_ = {carried_inflow_m3s_.at(i)};
     engine.prepare();
     engine.truth_ = {truth_.at(i)};
+    if (!grid_correction_.empty()) engine.grid_correction_ = {grid_correction_.at(i)};
     engine.observe_nominal();
     int sims = 0;
     const Point best = engine.fit(effect, sims);
@@ -508,6 +562,7 @@ Status DiagnoseOptions::validate() const {
   check.require(none_noise_factor > 0.0, "none_noise_factor", none_noise_factor, "> 0");
   check.require(max_evaluations >= 2 && max_evaluations <= 50, "max_evaluations", max_evaluations, "2..50");
   check.require(threads >= 1, "threads", threads, ">= 1");
+  check.require(search_max_cells >= 0, "search_max_cells", search_max_cells, ">= 0");
   check.require(command_lead_samples >= 0.0 && command_lead_samples <= 1.0, "command_lead_samples",
                 command_lead_samples, "[0, 1]");
   check.require(settle_time_s >= 0.0, "settle_time_s", settle_time_s, ">= 0");

@@ -69,6 +69,13 @@ struct DiagnoseOptions {
   // returns is replayed whole. false: every replay runs the whole recording (slower; the same
   // result).
   bool search_fitted_part_only = true;
+  // A search's replays (and a secant's probe) run on the scenario's grid halved until all its
+  // pools together have at most this many cells, each replay corrected by the nominal model's
+  // difference between the two grids (defect correction): a replay costs the cells squared, and
+  // what a grid adds to the levels hardly changes with a small change of the canal. Every point
+  // that can be significant is judged on the scenario's grid (docs/diagnosis.md §4). Twice the
+  // lab's own 100 cells. 0: every replay on the scenario's grid.
+  int search_max_cells = 200;    // >= 0
   double min_bic_gain = 10.0;    // BIC improvement on the fitted part; >= 0
   double none_noise_factor = 3.0;  // "within the noise": primary RMS <= this × noise; > 0
   int max_evaluations = 6;       // simulations per re-simulated candidate (secant steps); 2..50

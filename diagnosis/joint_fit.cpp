@@ -167,14 +167,18 @@ Engine::JointFit Engine::fit_jointly(std::vector<EffectAt> start, const std::vec
   JointFit out;
   std::vector<double> sd;
   {
-    const SearchReplays search(*this);
+    const ReplayScope search(*this, Replays::search);
     ceres::Solver::Summary summary;
     ceres::Solve(so, &lsq, &summary);
     out.effects = effects_at(z);
     const std::vector<double> r = fit_residuals(predict(out.effects, kReadings));
     sd = standard_deviations(cost.jacobian(z, r), r, z.size(), inflation_);
   }
-  out.point = evaluate(out.effects, kReadings);
+  {
+    // Replayed whole on the search grid: explain_jointly() judges it there first.
+    const ReplayScope whole(*this, Replays::probe);
+    out.point = evaluate(out.effects, kReadings);
+  }
   out.std_theta.assign(start.size(), 0.0);
   for (std::size_t j = 0; j < index.size(); ++j) out.std_theta[index[j]] = sd[j];
   out.simulations = simulations_run_ - simulations_before;
@@ -189,6 +193,7 @@ Engine::JointFit Engine::fit_jointly(std::vector<EffectAt> start, const std::vec
 std::vector<Channels> Engine::added_on_top(const Point& without, const Effect& added, double step) {
   const EffectKind& k = *added.kind;
   const double probe = std::clamp(k.theta_none + k.theta_probe, k.theta_low, k.theta_high) - k.theta_none;
+  const ReplayScope probe_grid(*this, Replays::probe);
   const std::vector<Channels> probed = predict({{added, k.theta_none + probe}}, kReadings);
   const std::vector<Channels> nominal = predict({}, kReadings);
   return moved_along(without.prediction, {{probed, nominal, step / probe}});
@@ -316,36 +321,55 @@ std::optional<JointExplanation> Engine::explain_jointly(const std::vector<Explai
   start.push_back({added, added.kind->theta_none});
   const auto alone = best_.find(candidate);
   if (alone != best_.end() && std::isfinite(alone->second.theta)) {
+    // Fitted-part costs, compared as the search that follows would compare them.
+    const ReplayScope search(*this, Replays::search);
     std::vector<EffectAt> from_alone = held;
     from_alone.push_back({added, alone->second.theta});
-    if (evaluate(from_alone, kReadings).cost < without.cost) start = std::move(from_alone);
+    if (evaluate(from_alone, kReadings).cost < evaluate(held, kReadings).cost) start = std::move(from_alone);
   }
   free.push_back(true);
   const JointFit fit = fit_jointly(start, free);
-
-  JointExplanation out;
-  Point with = fit.point;
-  with.theta = fit.effects.back().theta;
   bool spanned = false;  // by an effect of the explanation, refitted here (calibrated.hpp)
   for (std::size_t i = 0; i < held.size(); ++i) spanned = spanned || (free[i] && calibration_spanned_by(added, held[i].effect));
-  out.added = judged_against(added, with, costs(without.prediction), o_.added_min_score, !spanned);
-  out.added.parameter.std = fit.std_theta.back() * parameter_per_theta(added, with.theta);
-  out.added.simulations = fit.simulations;
-  for (std::size_t i = 0; i < explanation.size(); ++i) {
-    ParameterEstimate p = explanation[i].parameter;
-    p.value = to_parameter(held[i].effect, fit.effects[i].theta);
-    if (free[i]) p.std = fit.std_theta[i] * parameter_per_theta(held[i].effect, fit.effects[i].theta);
-    out.refitted.push_back(std::move(p));
-  }
-  // Whether the verdict adds to the candidate: the pair judged against the candidate alone.
-  if (explanation.size() == 1 && alone != best_.end()) {
-    with.theta = fit.effects.front().theta;
-    std::vector<EffectAt> candidate_alone = {{added, alone->second.theta}};
-    const Point alone_point = evaluate(candidate_alone, kReadings);
-    const bool verdict_spanned = calibration_spanned_by(held.front().effect, added);
-    out.explanation_adds =
-        judged_against(held.front().effect, with, costs(alone_point.prediction), o_.added_min_score, !verdict_spanned)
-            .significant;
+
+  // The pair at the joint optimum (`with`, replayed whole) judged against the explanation and, for
+  // an explanation of one effect, the verdict against the candidate alone.
+  const auto judged = [&](Point with) {
+    JointExplanation out;
+    with.theta = fit.effects.back().theta;
+    out.added = judged_against(added, with, costs(without.prediction), o_.added_min_score, !spanned);
+    out.added.parameter.std = fit.std_theta.back() * parameter_per_theta(added, with.theta);
+    out.added.simulations = fit.simulations;
+    for (std::size_t i = 0; i < explanation.size(); ++i) {
+      ParameterEstimate p = explanation[i].parameter;
+      p.value = to_parameter(held[i].effect, fit.effects[i].theta);
+      if (free[i]) p.std = fit.std_theta[i] * parameter_per_theta(held[i].effect, fit.effects[i].theta);
+      out.refitted.push_back(std::move(p));
+    }
+    if (explanation.size() == 1 && alone != best_.end()) {
+      with.theta = fit.effects.front().theta;
+      std::vector<EffectAt> candidate_alone = {{added, alone->second.theta}};
+      // On the grid the candidate was judged on alone (a search stopped at its probe: the search grid).
+      const ReplayScope grid(*this, alone->second.on_search_grid ? Replays::probe : Replays::judged);
+      const Point alone_point = evaluate(candidate_alone, kReadings);
+      const bool verdict_spanned = calibration_spanned_by(held.front().effect, added);
+      out.explanation_adds =
+          judged_against(held.front().effect, with, costs(alone_point.prediction), o_.added_min_score, !verdict_spanned)
+              .significant;
+    }
+    return out;
+  };
+  // Judged on the search grid first: most candidates add nothing, and the grid's second-order
+  // error cannot make them add. A candidate within reach of added_min_score there (the prospects'
+  // margin, kProspectShare), or one significant alone, whose pair may be ambiguous, is judged
+  // again on the scenario's grid.
+  JointExplanation out = judged(fit.point);
+  const auto alone_judged = judged_alone_.find(candidate);
+  const bool significant_alone = alone_judged != judged_alone_.end() && alone_judged->second.significant;
+  if (fit.point.on_search_grid && (significant_alone || !(out.added.score < kProspectShare * o_.added_min_score))) {
+    int sims = 0;
+    out = judged(replayed_whole(fit.effects, fit.point, kReadings, sims));
+    out.added.simulations += sims;
   }
   return out;
 }

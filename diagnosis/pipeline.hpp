@@ -192,6 +192,9 @@ struct Diagnosis {
   std::string lowering_experiment;   // the experiment that would lower the largest thresholds
   std::vector<RecordingSeries> series;
   std::map<std::string, double> channel_scale;  // s_c of the cost weights
+  // The scenario engine's grids, in cells over all pools: the model's, and the one its searches
+  // replayed on (DiagnoseOptions::search_max_cells); 0 for the reduced-model engine.
+  int model_cells = 0, search_cells = 0;
   double seconds = 0.0;
 };
 

@@ -151,6 +151,7 @@ json to_json(const Diagnosis& d) {
            {"mismatch", mismatch_json(d.mismatch)}, {"mismatch_after", mismatch_json(d.mismatch_after)},
            {"residual_tests", tests}, {"noise_mm", d.noise}, {"noise_limit_nrmse", json_number(d.noise_limit_nrmse)},
            {"nominal_rms_mm", d.nominal_rms}, {"channel_scale", scales}, {"seconds", d.seconds}};
+  if (d.model_cells > 0) out["grid"] = {{"model_cells", d.model_cells}, {"search_cells", d.search_cells}};
   if (d.form) {
     json estimates = json::array();
     for (const auto& e : d.form->estimates) {
@@ -210,6 +211,10 @@ std::string text_summary(const Diagnosis& d) {
                                        format_figure(c.slow_tolerated, 3) + " mm"
                                  : std::string())
       << (c.ordinary ? "" : "  <- beyond noise and tolerance") << '\n';
+  }
+  if (d.search_cells > 0 && d.search_cells < d.model_cells) {
+    s << "searches replayed on " << d.search_cells << " cells, corrected by the nominal model's difference from its "
+      << d.model_cells << "; every judged point replayed on the " << d.model_cells << '\n';
   }
   if (d.form && d.form->holds) {
     s << d.form->effect << " fitted to each recording alone:";

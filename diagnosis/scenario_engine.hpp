@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "calibration/observe.hpp"
@@ -31,6 +32,7 @@ struct Point {
   std::vector<Channels> prediction;
   std::vector<double> r;   // sqrt(w_c) (data - model) over the fitted parts, all channels
   double cost = 0.0;       // r·r / fitted samples
+  bool on_search_grid = false;  // replayed on the search grid (Engine::Replays), not the scenario's
 };
 
 struct Costs {
@@ -85,7 +87,7 @@ class Engine final : public Explainer {
   EffectResult explain(const std::string& candidate) override;
   std::vector<RecordingResiduals> residuals_with(const std::string& effect) const override;
   std::vector<RecordingSeries> series_with(const std::string& effect) const override;
-  void describe(Diagnosis& d) const override { d.channel_scale = scale_; }
+  void describe(Diagnosis& d) const override;
   std::optional<JointExplanation> explain_jointly(const std::vector<ExplainedEffect>& explanation,
                                                   const std::string& candidate) override;
   void detection_thresholds(const std::vector<std::string>& candidates, const std::string& verdict,
@@ -125,24 +127,26 @@ class Engine final : public Explainer {
   SensorModel sensors_with(const std::vector<EffectAt>& effects, Readings readings) const;
   std::vector<Channels> predict(const std::vector<EffectAt>& effects, Readings readings = Readings::as_sensor);
   const std::vector<Channels>& simulated(const std::vector<EffectAt>& hydraulic);
-  // A search compares its points by the fitted-part residual alone, so its replays may end after
-  // the fitted part (plus the lookahead a negative reading delay needs): half the work at the
-  // default fit_fraction. Within a SearchReplays scope they do (DiagnoseOptions::
-  // search_fitted_part_only); the point a search returns is replayed whole (replayed_whole) before
-  // anything judges it on the held-out part.
-  class SearchReplays {
+  // Where a replay runs. A search compares its points by the fitted-part residual alone, so its
+  // replays may end after the fitted part (plus the lookahead a negative reading delay needs):
+  // half the work at the default fit_fraction (DiagnoseOptions::search_fitted_part_only). They
+  // run on the search grid (DiagnoseOptions::search_max_cells), as does a secant's probe, whose
+  // whole replay gives the first-order prospects and the detection thresholds their signature.
+  // The point a search returns is replayed whole on the scenario's grid (replayed_whole) before
+  // anything judges it.
+  enum class Replays { judged, probe, search };
+  class ReplayScope {
    public:
-    explicit SearchReplays(Engine& engine) : engine_(engine), outer_(engine.search_replays_) {
-      engine_.search_replays_ = true;
-    }
-    ~SearchReplays() { engine_.search_replays_ = outer_; }
-    SearchReplays(const SearchReplays&) = delete;
-    SearchReplays& operator=(const SearchReplays&) = delete;
+    ReplayScope(Engine& engine, Replays replays) : engine_(engine), outer_(engine.replays_) { engine_.replays_ = replays; }
+    ~ReplayScope() { engine_.replays_ = outer_; }
+    ReplayScope(const ReplayScope&) = delete;
+    ReplayScope& operator=(const ReplayScope&) = delete;
 
    private:
     Engine& engine_;
-    bool outer_;  // an enclosing scope's setting, restored on leaving
+    Replays outer_;  // an enclosing scope's setting, restored on leaving
   };
+  bool on_search_grid() const { return replays_ != Replays::judged && search_divisor_ > 1; }
   bool covers_heldout(const Point& p) const;
   Point replayed_whole(const std::vector<EffectAt>& effects, Point searched, Readings readings, int& sims);
   // theta = the last effect's
@@ -233,9 +237,18 @@ class Engine final : public Explainer {
   // every candidate to its best point.
   std::map<std::string, double> stopped_at_probe_;
   bool screen_searches_ = true;
-  // simulated(): by effect and θ, and whether the replays end after the fitted part
-  std::map<std::pair<std::vector<std::pair<std::string, double>>, bool>, std::vector<Channels>> simulations_;
-  bool search_replays_ = false;      // within a SearchReplays scope
+  // simulated(): by effect and θ, on the search grid or not, and whether the replays end after the
+  // fitted part
+  using SimulationKey = std::tuple<std::vector<std::pair<std::string, double>>, bool, bool>;
+  std::map<SimulationKey, std::vector<Channels>> simulations_;
+  Replays replays_ = Replays::judged;  // within a ReplayScope, its setting
+  // The search grid has 1/search_divisor_ of the scenario's cells (DiagnoseOptions::
+  // search_max_cells); each replay on it is corrected by the nominal model's difference between
+  // the two grids (per recording and channel: truth_ minus the nominal replayed on the search
+  // grid; computed at the first such replay).
+  int search_divisor_ = 1;
+  std::vector<Channels> grid_correction_;
+  void correct_for_search_grid();
   std::size_t lookahead_ = 0;        // samples a search replay runs past the fitted part
   std::vector<std::string> level_channels_;
   int simulations_run_ = 0;          // replays of all recordings simulated() ran

@@ -84,8 +84,12 @@ Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims)
   const EffectKind& e = *effect.kind;
   std::vector<Point> pts;
   pts.push_back(start);
-  // The probe is replayed whole: the effect's detection threshold reads its signature from it.
-  pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
+  // The probe is replayed whole: its first-order prospect and the effect's detection threshold
+  // read the held-out part of its signature.
+  {
+    const ReplayScope probe(*this, Replays::probe);
+    pts.push_back(evaluate(effect, std::clamp(e.theta_none + e.theta_probe, e.theta_low, e.theta_high)));
+  }
   ++sims;
   const auto best_seen = [&pts] {
     return *std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
@@ -99,7 +103,7 @@ Point Engine::fit_by_secant(const Effect& effect, const Point& start, int& sims)
       return best_seen();
     }
   }
-  const SearchReplays search(*this);
+  const ReplayScope search(*this, Replays::search);
   const double tol = 2e-3 * (e.theta_high - e.theta_low);
   while (sims < o_.max_evaluations) {
     const auto best = std::min_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.cost < b.cost; });
@@ -403,7 +407,7 @@ Point Engine::fit_gate_rate_limit(const Effect& rate_limit, int& sims) {
   if (have_position) {
     best = rate_limit_from_position(rate_limit, sims);
   } else {
-    const SearchReplays search(*this);
+    const ReplayScope search(*this, Replays::search);
     best = rate_limit_from_levels(rate_limit, sims);
   }
   if (std::isnan(best.theta)) best.theta = 0.0;

@@ -105,6 +105,8 @@ Engine::Signature Engine::signature_of(const Effect& effect, const std::vector<C
   Signature sig;
   const EffectKind& k = *effect.kind;
   sig.step = k.theta_probe;
+  // The probe of the effect's secant search (on the search grid), when it had one.
+  const ReplayScope probe(*this, Replays::probe);
   const std::vector<Channels> probed = predict({{effect, k.theta_none + sig.step}}, Readings::expected);
   sig.energy.assign(recs_.size(), 0.0);
   for (std::size_t i = 0; i < recs_.size(); ++i) {

@@ -419,7 +419,8 @@ py::dict calibrate(const std::string& text, const std::string& source, const py:
 
 py::dict diagnose(const std::string& text, const std::string& source, const py::list& recordings,
                   const py::list& baseline, const std::vector<std::string>& candidates, double fit_fraction,
-                  int threads, bool recorded_upstream, bool reconstruct_clock, const py::object& progress) {
+                  int threads, bool recorded_upstream, bool reconstruct_clock, int search_cells,
+                  const py::object& progress) {
   const scenarios::Scenario s = parse(text, source);
   const std::vector<Recording> diagnosed = recordings_from(recordings, true);
   const std::vector<Recording> reference = recordings_from(baseline, true);
@@ -440,6 +441,7 @@ py::dict diagnose(const std::string& text, const std::string& source, const py::
   options.threads = threads;
   options.use_recorded_upstream = recorded_upstream;
   options.reconstruct_clock = reconstruct_clock;
+  options.search_max_cells = search_cells;
   LongCall call(progress);
   py::dict out;
   if (reference.empty()) {

@@ -3,6 +3,7 @@
 #include "core/format.hpp"
 #include "gates/sluice_gate.hpp"
 
+#include <algorithm>
 #include <utility>
 
 namespace canalsim::scenarios {
@@ -25,6 +26,21 @@ Scenario with_cells_multiplied(Scenario s, int factor) {
     pool.design_discharge_m3s.clear();
   }
   return s;
+}
+
+Scenario with_cells_divided(Scenario s, int divisor) {
+  for (auto& pool : s.pools) {
+    pool.cells = std::max(2, (pool.cells + divisor - 1) / divisor);
+    pool.design_depth_m.clear();
+    pool.design_discharge_m3s.clear();
+  }
+  return s;
+}
+
+int total_cells(const Scenario& s) {
+  int cells = 0;
+  for (const auto& pool : s.pools) cells += pool.cells;
+  return cells;
 }
 
 Scenario independent_truth(Scenario s, const TruthVariation& v) {

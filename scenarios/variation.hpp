@@ -35,6 +35,13 @@ Scenario independent_truth(Scenario s, const TruthVariation& v = {});
 // belong to the old grid, dropped). Truths, the calibration's grid check and its refinement use it.
 Scenario with_cells_multiplied(Scenario s, int factor);
 
+// The scenario on 1/`divisor` of the cells of every pool (rounded up, at least two a pool; its
+// per-cell design profiles dropped likewise). The diagnosis' searches replay on it.
+Scenario with_cells_divided(Scenario s, int divisor);
+
+// The total number of cells over the scenario's pools.
+int total_cells(const Scenario& s);
+
 // The scenario with `law` at every sluice gate (head, between pools, downstream), coefficients
 // unchanged (they multiply the law's published one). Calibration compares laws with it.
 Scenario with_gate_law(Scenario s, GateLaw law);

@@ -269,14 +269,16 @@ class Diagnosis:
 
 def diagnose(scenario: ScenarioLike, recordings: Recordings, baseline: Optional[Recordings] = None, *,
              candidates: Sequence[str] = (), fit_fraction: float = 0.5, threads: int = 2,
-             recorded_upstream: bool = False, clock: bool = True, progress: Progress = None) -> Diagnosis:
+             recorded_upstream: bool = False, clock: bool = True, search_cells: int = 200,
+             progress: Progress = None) -> Diagnosis:
     """Locates and explains the mismatch between a scenario and recordings, as ``canalsim
     diagnose`` does; with ``baseline`` (recordings of the canal as it was) the scenario is first
-    calibrated on them (``--baseline``). ``clock=False`` is ``--no-clock``."""
+    calibrated on them (``--baseline``). ``clock=False`` is ``--no-clock``; ``search_cells`` is
+    ``--search-cells`` (0: every replay on the scenario's grid)."""
     s = _scenario(scenario)
     reference = _frames.recordings(baseline, "baseline recording") if baseline is not None else []
     d = _canalsim.diagnose(s.text, s.source, _frames.recordings(recordings), reference, list(candidates),
-                           fit_fraction, threads, recorded_upstream, clock, progress)
+                           fit_fraction, threads, recorded_upstream, clock, search_cells, progress)
     j = json.loads(d["json"])
     explanation = j.get("explanation", {})
     effects = explanation.get("effects", []) if isinstance(explanation, dict) else explanation

@@ -59,6 +59,20 @@ def test_diagnose_equals_the_command_line(cli, tmp_path, recording_of_a_freer_ga
     assert result.explanation == expected["explanation"]
 
 
+def test_diagnose_searches_on_the_grid_the_command_line_would(cli, tmp_path, recording_of_a_freer_gate):
+    # The lab's 100 cells, searched on 50 as --search-cells 50 does; the JSON names both grids.
+    candidates = "discharge_coefficient,friction"
+    cli("diagnose", "--scenario", "lab", recording_of_a_freer_gate, "--candidates", candidates,
+        "--search-cells", "50", "--json", tmp_path / "d.json")
+    expected = json.loads((tmp_path / "d.json").read_text())
+    result = canalsim.diagnose("lab", recording_of_a_freer_gate, candidates=candidates.split(","), search_cells=50)
+    assert result.json["grid"] == {"model_cells": 100, "search_cells": 50} == expected["grid"]
+    assert result.verdict == expected["verdict"] == "discharge_coefficient"
+    assert result.explanation == expected["explanation"]
+    with pytest.raises(canalsim.InputError, match="search_max_cells"):
+        canalsim.diagnose("lab", recording_of_a_freer_gate, candidates=["friction"], search_cells=-1)
+
+
 def test_progress_reaches_the_callable_and_its_exception_stops_the_work():
     reports = []
     canalsim.simulate("lab", "op1", progress=lambda fraction, message: reports.append(fraction))
