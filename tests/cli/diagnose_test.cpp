@@ -131,6 +131,7 @@ TEST(Diagnose, AChannelTheRecordingsLackIsOneErrorLine) {
   EXPECT_FALSE(fs::exists(scratch / "d.json"));
   r = run_canalsim("diagnose --scenario short.toml op3.csv --candidates sensor_offset[q_lps]", scratch);
   EXPECT_TRUE(fails_naming(r, "unknown effect 'sensor_offset[q_lps]'"));
+  fs::remove_all(scratch);
 }
 
 TEST(Diagnose, CalibratedScenarioCarriesItsDeviationsAndBaselineRunsInOneCall) {
