@@ -90,7 +90,7 @@ void check_run_cost(const Scenario& s, const ExperimentSpec& e, double h, bool a
 
 RunCostGuard::RunCostGuard(const Scenario& s, const ExperimentSpec& e, bool allow_long)
     : where_(s.source + ": experiment '" + e.name + "': "), end_(e.duration_s), allow_long_(allow_long) {
-  for (const PoolSpec& pool : s.pools) cells_ += pool.cells;
+  cells_ = total_cells(s);
 }
 
 void RunCostGuard::check(long steps, double time, double last_step) {

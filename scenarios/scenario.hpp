@@ -206,4 +206,11 @@ struct Scenario {
   const ExperimentSpec* find_experiment(const std::string& name) const;
 };
 
+// The cells over all the scenario's pools (a run's work grows with them).
+inline int total_cells(const Scenario& s) {
+  int cells = 0;
+  for (const PoolSpec& pool : s.pools) cells += pool.cells;
+  return cells;
+}
+
 }  // namespace canalsim::scenarios

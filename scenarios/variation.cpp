@@ -17,30 +17,25 @@ void note(std::string* drawn, const std::string& line) {
   if (drawn) *drawn += (drawn->empty() ? "" : "; ") + line;
 }
 
-}  // namespace
-
-Scenario with_cells_multiplied(Scenario s, int factor) {
+// The scenario with each pool's cells `regridded(cells)`.
+template <class Regrid>
+Scenario on_another_grid(Scenario s, Regrid regridded) {
   for (auto& pool : s.pools) {
-    pool.cells *= factor;
+    pool.cells = regridded(pool.cells);
     pool.design_depth_m.clear();  // per-cell design profiles belong to the old grid
     pool.design_discharge_m3s.clear();
   }
   return s;
 }
 
-Scenario with_cells_divided(Scenario s, int divisor) {
-  for (auto& pool : s.pools) {
-    pool.cells = std::max(2, (pool.cells + divisor - 1) / divisor);
-    pool.design_depth_m.clear();
-    pool.design_discharge_m3s.clear();
-  }
-  return s;
+}  // namespace
+
+Scenario with_cells_multiplied(Scenario s, int factor) {
+  return on_another_grid(std::move(s), [factor](int cells) { return cells * factor; });
 }
 
-int total_cells(const Scenario& s) {
-  int cells = 0;
-  for (const auto& pool : s.pools) cells += pool.cells;
-  return cells;
+Scenario with_cells_divided(Scenario s, int divisor) {
+  return on_another_grid(std::move(s), [divisor](int cells) { return std::max(2, (cells + divisor - 1) / divisor); });
 }
 
 Scenario independent_truth(Scenario s, const TruthVariation& v) {

@@ -39,9 +39,6 @@ Scenario with_cells_multiplied(Scenario s, int factor);
 // per-cell design profiles dropped likewise). The diagnosis' searches replay on it.
 Scenario with_cells_divided(Scenario s, int divisor);
 
-// The total number of cells over the scenario's pools.
-int total_cells(const Scenario& s);
-
 // The scenario with `law` at every sluice gate (head, between pools, downstream), coefficients
 // unchanged (they multiply the law's published one). Calibration compares laws with it.
 Scenario with_gate_law(Scenario s, GateLaw law);
