@@ -106,6 +106,11 @@ std::vector<FormChoice> form_choices(const std::vector<Recording>& recordings, c
   out.push_back({"zero_head_mm", "the head gate's submerged law linear in the head below a fitted head h0 (a gate running nearly drowned)",
                  [](const Scenario& x, const std::vector<std::string>& specs) { return x.head_gate && !fitted(specs, "zero_head_mm"); },
                  [](Scenario&, std::vector<std::string>& specs) { specs.push_back("zero_head_mm"); }});
+  out.push_back({"border_floor_ratio", "the floor of the head gate's regime border over the tail fitted (a wide-open gate near zero head)",
+                 [](const Scenario& x, const std::vector<std::string>& specs) {
+                   return x.head_gate && x.head_gate->law == scenarios::GateLaw::swamee && !fitted(specs, "border_floor_ratio");
+                 },
+                 [](Scenario&, std::vector<std::string>& specs) { specs.push_back("border_floor_ratio"); }});
   out.push_back({"sensor_delay_s", "a time offset between the command and the levels",
                  [](const Scenario&, const std::vector<std::string>& specs) { return !fitted(specs, "sensor_delay_s"); },
                  [](Scenario&, std::vector<std::string>& specs) { specs.push_back("sensor_delay_s"); }});

@@ -57,7 +57,9 @@ struct FormEstimate {
 
 // One model-form choice, refitted.
 struct ModelFormTrial {
-  std::string name;         // cd_opening_exponent, zero_head_mm, sensor_delay_s, weir_crest_mm, pump_lag_s, pump_controller, tail_level_mm
+  // cd_opening_exponent, zero_head_mm, border_floor_ratio, sensor_delay_s, weir_crest_mm,
+  // pump_lag_s, pump_controller, tail_level_mm
+  std::string name;
   std::string description;  // what the choice adds to the model, in words
   int added_parameters = 0;  // negative for a swap that drops more than it adds
   bool ok = false;

@@ -6,12 +6,16 @@
 
 #include "core/errors.hpp"
 #include "core/format.hpp"
+#include "core/laws.hpp"
 
 namespace canalsim::calibration {
 namespace {
 
 using scenarios::Scenario;
 constexpr double kMm = 1e-3;
+// The share of the samples under the head gate's floored regime border (share_under_floored_border)
+// from which the default set fits the floor: a tenth, one operating point of several.
+constexpr double kFlooredShareForDefault = 0.1;
 
 Parameter make(std::string name, std::string unit, std::string key, std::string description, double low, double high,
                Transform transform, double step, std::function<double(const Scenario&)> get,
@@ -68,6 +72,11 @@ void add_head_gate(const Scenario& s, std::vector<Parameter>& out) {
                      "(gates/sluice_gate.hpp)",
                      -1.0, 1.0, Transform::linear, 0.01, [](const Scenario& x) { return x.head_gate->cd_opening_curvature; },
                      [](Scenario& x, double v) { x.head_gate->cd_opening_curvature = v; }));
+  out.push_back(make("border_floor_ratio", "-", "head_gate.border_floor_ratio",
+                     "floor κ of the head gate's regime border over the tailwater, max(y_lc, κ y3): the head "
+                     "(κ − 1) y3 at which a wide-open gate's flow frees (gates/sluice_gate.hpp)",
+                     1.005, 1.3, Transform::linear, 0.002, [](const Scenario& x) { return x.head_gate->border_floor_ratio; },
+                     [](Scenario& x, double v) { x.head_gate->border_floor_ratio = v; }));
   out.push_back(make("actuator_speed_mm_s", "mm/s", "head_gate.actuator_speed_m_s",
                      "head gate actuator speed (paper eq. 16); the scenario's 0 (ideal) is outside the bounds", 0.5,
                      1000.0, Transform::log, 0.02, [](const Scenario& x) { return x.head_gate->actuator_speed_m_s / kMm; },
@@ -167,6 +176,31 @@ void add_reservoir(const Scenario& s, std::vector<Parameter>& out) {
   out.back().scan = {0.25, 0.5, 1.0, 2.0, 4.0, 8.0};
 }
 
+// The share of the recordings' samples in which the head gate runs under the floor of its regime
+// border (gates/sluice_gate.hpp): Swamee's y_lc (paper eq. 23) below κ y3 and the upstream level
+// between the tail and κ y3, read from the gate's recorded position (else its command) and the
+// levels on either side of it. There the floor sets the submergence factor and its slope in the
+// tail; elsewhere it changes nothing, and fitting it would leave the fit a parameter the
+// recordings do not determine.
+double share_under_floored_border(const Scenario& s, const std::vector<Recording>& recordings) {
+  if (!s.head_gate || s.head_gate->law != scenarios::GateLaw::swamee) return 0.0;
+  const double kappa = s.head_gate->border_floor_ratio;
+  std::size_t under = 0, samples = 0;
+  for (const Recording& r : recordings) {
+    const char* opening = r.has(columns::gate_position) ? columns::gate_position : columns::gate_command;
+    if (!r.has(opening) || !r.has(columns::upstream_level) || !r.has(columns::level_below_gate)) return 0.0;
+    const auto& a = r.column(opening);
+    const auto& y1 = r.column(columns::upstream_level);
+    const auto& y3 = r.column(columns::level_below_gate);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ++samples;
+      const double floor = kappa * y3[i];
+      if (a[i] > 0.0 && y1[i] > y3[i] && y1[i] < floor && laws::free_flow_limit_level(y3[i], a[i]) < floor) ++under;
+    }
+  }
+  return samples == 0 ? 0.0 : static_cast<double>(under) / static_cast<double>(samples);
+}
+
 }  // namespace
 
 double Parameter::to_search(double value) const { return transform == Transform::log ? std::log(value) : value; }
@@ -197,6 +231,7 @@ std::vector<std::string> default_parameters(const Scenario& s, const std::vector
     names.insert(names.end(), {"downstream_opening_mm", "downstream_zero_head_mm"});
   }
   if (s.downstream.kind == scenarios::DownstreamKind::weir) names.push_back("weir_crest_mm");
+  if (share_under_floored_border(s, recordings) >= kFlooredShareForDefault) names.push_back("border_floor_ratio");
   auto all_have = [&](const char* column) {
     return !recordings.empty() &&
            std::all_of(recordings.begin(), recordings.end(), [&](const Recording& r) { return r.has(column); });

@@ -9,6 +9,7 @@
 //   zero_head_mm            mm        head_gate.zero_head_m                       linear
 //   cd_opening_exponent     -         head_gate.cd_opening_exponent               linear
 //   cd_opening_curvature    -         head_gate.cd_opening_curvature              linear
+//   border_floor_ratio      -         head_gate.border_floor_ratio                linear
 //   manning_n (.i)          s m^-1/3  pools[i].manning_n                          log
 //   bed_slope (.i)          m/m       pools[i].bed_slope                          linear
 //   downstream_opening_mm   mm        downstream.gate.opening_m                   linear
@@ -75,8 +76,10 @@ std::string parameter_names(const std::vector<Parameter>& catalog);
 // opening, or weir crest), a downstream gate's zero-head regularisation (its law near zero head
 // differs from simulator to simulator and from canal to canal; docs/calibration.md) and an offset
 // for every level sensor the recordings hold — except y_up_mm when the recorded upstream level
-// drives the replay. Geometry, bed slope, the actuator and the pump are measured or specified and
-// stay as they are unless --params names them.
+// drives the replay — and, when a tenth of the samples put Swamee's head gate under the floor of
+// its regime border (a gate wide open at a millimetre of head), that floor, border_floor_ratio.
+// Geometry, bed slope, the actuator and the pump are measured or specified and stay as they are
+// unless --params names them.
 std::vector<std::string> default_parameters(const scenarios::Scenario& scenario, const std::vector<Recording>& recordings,
                                             bool upstream_replayed);
 

@@ -189,9 +189,10 @@ void add_calibrate_command(CLI::App& app) {
                 "or four times its cells fit the recordings better (by default those are written when they lower the cost by a "
                 "tenth; docs/calibration.md)");
   cmd->add_flag("--model-forms", args->model_forms,
-                "Then add each model-form choice left open (the head gate's zero-head regularisation, a time offset "
-                "between command and levels, the tail level) and refit from the estimates, on the scenario's grid and "
-                "on twice its cells: the cost each removes and its information criterion (docs/calibration.md)");
+                "Then add each model-form choice left open (the head gate's rating, zero-head regularisation and "
+                "regime border's floor, a time offset between command and levels, a weir, the tail level, the pump) "
+                "and refit from the estimates, on the scenario's grid and on twice its cells: the cost each removes "
+                "and its information criterion (docs/calibration.md)");
   cmd->add_option("--replay", args->replay,
                   "diagnosis: replay the recordings as `diagnose` does (the upstream model drives the head gate; "
                   "for a scenario diagnosed next); recorded-upstream: drive the head gate with the recorded y_up_mm "

@@ -18,8 +18,6 @@ constexpr double swamee_free_coefficient = 0.864;
 constexpr double swamee_contraction_exponent = 0.072;
 constexpr double swamee_jump_ratio = 15.0;
 constexpr double border_exponent = laws::regime_border_exponent;  // eq. (8), (10), (23)
-// Floor of the flow law's regime border in units of the tailwater depth (see forward()).
-constexpr double zero_head_border_ratio = 1.05;
 constexpr double submergence_weight = 0.32;
 constexpr double submergence_exponent = 0.7;
 
@@ -133,6 +131,8 @@ Status SluiceGateOptions::validate() const {
                opening_exponent, "a value in [-2, 2]")
       .require(std::isfinite(opening_curvature) && std::abs(opening_curvature) <= 2.0, "opening_curvature",
                opening_curvature, "a value in [-2, 2]")
+      .require(std::isfinite(border_floor_ratio) && border_floor_ratio > 1.0 && border_floor_ratio <= 2.0,
+               "border_floor_ratio", border_floor_ratio, "a value in (1, 2]")
       .require(in_half_open(reference_opening, 0.0, 100.0), "reference_opening", reference_opening,
                "a value in (0, 100] m")
       .require(in_half_open(gravity, 0.0, 100.0), "gravity", gravity, "a value in (0, 100] m/s^2")
@@ -195,14 +195,15 @@ struct SluiceGate::SeenOpening {
   bool out_of_water = false;  // the geometric opening reaches the upstream surface
 };
 
-// The border of the flow law: Swamee's y_lc (paper eq. 23), floored at kappa y3. Without the
+// The border of the flow law: Swamee's y_lc (paper eq. 23), floored at κ y3 (SluiceGateOptions::
+// border_floor_ratio). Without the
 // floor a gate opened wider than ~0.75 y3 (where y_lc < y3) would pass free flow right up to
 // zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
 // the discharge falls continuously to zero. The paper's regime classification
 // (classify_regime) keeps the published condition.
 struct SluiceGate::Border {
   double y_lc = 0.0;
-  bool floored = false;  // at kappa y3, where it does not depend on the opening
+  bool floored = false;  // at κ y3, where it does not depend on the opening
 };
 
 SluiceGate::SeenOpening SluiceGate::seen_opening(double y1, double a, double geometric) const {
@@ -255,8 +256,9 @@ SluiceGate::Border SluiceGate::flow_border(double y3, double a_seen, Memo* memo)
       memo->border = y_lc_swamee;
     }
   }
-  const bool floored = zero_head_border_ratio * y3 > y_lc_swamee;
-  return {floored ? zero_head_border_ratio * y3 : y_lc_swamee, floored};
+  const double floor = options_.border_floor_ratio * y3;
+  const bool floored = floor > y_lc_swamee;
+  return {floored ? floor : y_lc_swamee, floored};
 }
 
 // The simple law's submerged discharge, eq. (11), its head's square root regularised near zero
@@ -302,7 +304,7 @@ SluiceGate::Partials SluiceGate::submerged_swamee(double y1, double y3, const Se
                                          (head > floor ? D / head : floored_power(head, submergence_exponent - 1.0, floor));
   const double dS_dmargin = submergence_exponent *
       (margin > floor ? S / margin : floored_power(margin, submergence_exponent - 1.0, floor));
-  const double dylc_dy3 = border.floored ? zero_head_border_ratio : (1.0 + border_exponent) * y_lc / y3;
+  const double dylc_dy3 = border.floored ? options_.border_floor_ratio : (1.0 + border_exponent) * y_lc / y3;
   const double dylc_dseen = border.floored ? 0.0 : -border_exponent * y_lc / seen.a;
 
   const double dF_dy1 = dF_dD * dD_dhead + dF_dS * dS_dmargin * (dylc_dseen * seen.d_y1 - 1.0);

@@ -27,10 +27,11 @@
 // Extensions beyond the published laws, each chosen so that q stays continuous:
 // - Reverse head (y3 > y1): the law is applied with the roles of the two sides swapped and the
 //   sign of q reversed, so q(y1, y3, a) = -q(y3, y1, a) exactly.
-// - Wide-open gate near zero head: where y_lc < 1.05 y3 (a gate opened wider than ~0.75 y3),
-//   Swamee's condition would call the flow free up to zero head and q would jump to reverse flow.
-//   The flow law floors its border at 1.05 y3, so the flow submerges as the head vanishes and q
-//   falls continuously to 0. classify_regime keeps the paper's published condition.
+// - Wide-open gate near zero head: where y_lc < κ y3 (κ = 1.05 by default: a gate opened wider
+//   than ~0.75 y3), Swamee's condition would call the flow free up to zero head and q would jump
+//   to reverse flow. The flow law floors its border at κ y3 (SluiceGateOptions::
+//   border_floor_ratio), so the flow submerges as the head vanishes and q falls continuously to 0.
+//   classify_regime keeps the paper's published condition.
 // - Near zero head, optionally (SluiceGateOptions::zero_head, 0 by default): the submerged law's
 //   power of the head turns linear below a head h0, so its slope stays finite.
 // - Closed gate (a <= 0 and no leakage): a wall, q = 0.
@@ -125,6 +126,15 @@ struct SluiceGateOptions {
   double opening_exponent = 0.0;   // β, range [-2, 2]
   double opening_curvature = 0.0;  // γ, range [-2, 2]
   double reference_opening = 0.025;  // a_ref [m], range (0, 100]
+  // The floor κ of the flow law's regime border, in units of the tailwater depth: the border is
+  // max(y_lc, κ y3), range (1, 2]. Swamee's law was not fitted where y_lc falls below the tail (a
+  // gate opened wider than ~0.75 y3), so there the border is a choice: with it the flow is
+  // submerged until the head reaches (κ − 1) y3, 3 mm on the lab's 60 mm at κ = 1.05, and frees
+  // above. Every simulator makes this choice its own way; the submergence factor of a gate running
+  // at a millimetre of head (the lab's head gate at op3/op4) and its slope in the tail, which sets
+  // how the gate reflects the waves coming back up the pool, follow it. Calibration fits it
+  // (calibration/parameters.cpp border_floor_ratio).
+  double border_floor_ratio = 1.05;
   double gravity = standard_gravity;  // m/s^2, range (0, 100]
 
   // Ok, or one line naming the field and its allowed range (core/status.hpp).

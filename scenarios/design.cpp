@@ -66,6 +66,7 @@ gates::GateGeometry gate_geometry(const GateSpec& g) {
   geometry.law.opening_exponent = g.cd_opening_exponent;
   geometry.law.opening_curvature = g.cd_opening_curvature;
   geometry.law.reference_opening = g.cd_reference_opening();
+  geometry.law.border_floor_ratio = g.border_floor_ratio;
   return geometry;
 }
 

@@ -81,6 +81,10 @@ struct GateSpec {
   double cd_opening_curvature = 0.0;  // γ
   double cd_reference_opening_m = 0.0;
   double cd_reference_opening() const { return cd_reference_opening_m > 0.0 ? cd_reference_opening_m : 0.5 * max_opening_m; }
+  // The floor κ of the flow law's regime border over the tailwater, max(y_lc, κ y3) (gates/
+  // sluice_gate.hpp SluiceGateOptions::border_floor_ratio): where the gate runs wide open near
+  // zero head, the head κ y3 − y3 at which its flow frees.
+  double border_floor_ratio = 1.05;
   double actuator_speed_m_s = 0.0;  // 0 = ideal actuator; else constant speed (paper eq. 16)
   bool controlled = false;          // driven by the experiment's input signal
   // opening_m = "auto": opening_m is computed (scenarios/design.hpp) so that the gate passes the

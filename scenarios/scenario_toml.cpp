@@ -52,6 +52,8 @@ GateSpec read_gate(TomlTable t, const GateSpec& defaults) {
   g.cd_opening_curvature = t.number("cd_opening_curvature", g.cd_opening_curvature, {-2.0, 2.0}, "(0 = the law as published)");
   g.cd_reference_opening_m = t.number("cd_reference_opening_m", g.cd_reference_opening_m, {0.0, 100.0},
                                       "m (0 = half of max_opening_m)");
+  g.border_floor_ratio = t.number("border_floor_ratio", g.border_floor_ratio, {1.0, 2.0, true},
+                                  "(the regime border's floor over the tailwater, 1.05 by default)");
   g.actuator_speed_m_s = t.number("actuator_speed_m_s", g.actuator_speed_m_s, {0.0, 100.0}, "m/s (0 = ideal)");
   g.controlled = t.boolean("controlled", g.controlled);
   t.reject_unknown_keys();

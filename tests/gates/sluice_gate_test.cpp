@@ -384,8 +384,8 @@ std::vector<Point> smooth_points(const SluiceGate& gate, int count) {
     const Point p{depth(rng), depth(rng), opening(rng)};
     const double high = std::max(p.y1, p.y3), low = std::min(p.y1, p.y3);
     const double a_seen = std::min(p.a, gate.critical_opening_ratio() * high);
-    // The flow law's border: Swamee's y_lc, floored at 1.05 y3 (header comment).
-    const double y_lc = std::max(limit_condition_level(low, a_seen), 1.05 * low);
+    // The flow law's border: Swamee's y_lc, floored at κ y3 (header comment).
+    const double y_lc = std::max(limit_condition_level(low, a_seen), gate.options().border_floor_ratio * low);
     if (high - low < 1e-3) continue;                                  // zero head
     if (std::abs(high - y_lc) < 1e-3) continue;                       // regime border
     if (std::abs(p.a - gate.critical_opening_ratio() * high) < 1e-3) continue;  // cap kink
@@ -614,6 +614,55 @@ TEST(OpeningRating, OutOfRangeIsRejectedNamingTheField) {
   options = {};
   options.reference_opening = 0.0;
   EXPECT_NE(options.validate().message().find("reference_opening"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canalsim::gates
+
+namespace canalsim::gates {
+namespace {
+
+// --- the floor of the regime border ------------------------------------------------------------
+
+SluiceGate floored_at(double kappa) {
+  SluiceGateOptions options;
+  options.border_floor_ratio = kappa;
+  return SluiceGate(options);
+}
+
+// A wide-open gate (the lab's head gate at op3/op4: 45 mm under 60 mm) has Swamee's y_lc below
+// the tail; its border is κ y3, so Swamee's factor takes S = (κ y3 − y1)^0.7, by hand here, and
+// the flow is the free one once the head passes (κ − 1) y3.
+TEST(RegimeBorderFloor, SetsSwameesSubmergenceFactorOfAWideOpenGateByHand) {
+  const double y1 = 0.060, a = 0.045;
+  for (const double kappa : {1.02, 1.035, 1.05, 1.2}) {
+    const SluiceGate gate = floored_at(kappa);
+    for (const double y3 : {y1 - 5e-4, 0.5 * (y1 + y1 / kappa), y1 / kappa + 1e-5}) {  // under the floor
+      ASSERT_LT(limit_condition_level(y3, a), kappa * y3) << "the case must be one the floor is for";
+      const double D = std::pow(y1 - y3, 0.7), S = std::pow(kappa * y3 - y1, 0.7);
+      EXPECT_NEAR(gate.discharge(y1, y3, a), swamee_free_discharge(y1, a) * D / (0.32 * S + D), 1e-15)
+          << kappa << ' ' << y3;
+      EXPECT_EQ(gate.evaluate(y1, y3, a).regime, GateRegime::submerged);
+    }
+    const double freed = y1 / kappa - 1e-4;  // head above (κ − 1) y3
+    EXPECT_EQ(gate.discharge(y1, freed, a), swamee_free_discharge(y1, a)) << kappa;
+    EXPECT_EQ(gate.evaluate(y1, freed, a).regime, GateRegime::free);
+  }
+  // Where Swamee's border lies above the floor (a gate 20 mm open) the floor changes nothing.
+  EXPECT_EQ(floored_at(1.2).discharge(0.06, 0.045, 0.02), SluiceGate{}.discharge(0.06, 0.045, 0.02));
+}
+
+TEST(RegimeBorderFloor, DerivativesMatchCentralDifferences) {
+  expect_derivatives_match_central_differences(floored_at(1.02));
+  expect_derivatives_match_central_differences(floored_at(1.3));
+}
+
+TEST(RegimeBorderFloor, OutOfRangeIsRejectedNamingTheField) {
+  SluiceGateOptions options;
+  options.border_floor_ratio = 1.0;  // a border at the tail: no submerged flow at all
+  EXPECT_NE(options.validate().message().find("border_floor_ratio = 1: expected a value in (1, 2]"), std::string::npos)
+      << options.validate().message();
+  EXPECT_THROW(SluiceGate{options}, std::invalid_argument);
 }
 
 }  // namespace
