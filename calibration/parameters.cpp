@@ -178,11 +178,10 @@ void add_reservoir(const Scenario& s, std::vector<Parameter>& out) {
 
 // The share of the recordings' samples in which the head gate runs under the floor of its regime
 // border (gates/sluice_gate.hpp): Swamee's y_lc (paper eq. 23) below κ y3 and the upstream level
-// below κ y3, read from the gate's recorded position (else its command) and the levels on either
-// side of it. The recorded head may read negative there: the sensors' offsets, which calibration
-// fits, are of the size of the millimetre of head. Under the floor it sets the submergence factor
-// and its slope in the tail; elsewhere it changes nothing, and fitting it would leave the fit a
-// parameter the recordings do not determine.
+// between the tail and κ y3, read from the gate's recorded position (else its command) and the
+// levels on either side of it. There the floor sets the submergence factor and its slope in the
+// tail; elsewhere it changes nothing, and fitting it would leave the fit a parameter the
+// recordings do not determine.
 double share_under_floored_border(const Scenario& s, const std::vector<Recording>& recordings) {
   if (!s.head_gate || s.head_gate->law != scenarios::GateLaw::swamee) return 0.0;
   const double kappa = s.head_gate->border_floor_ratio;
@@ -196,7 +195,7 @@ double share_under_floored_border(const Scenario& s, const std::vector<Recording
     for (std::size_t i = 0; i < a.size(); ++i) {
       ++samples;
       const double floor = kappa * y3[i];
-      if (a[i] > 0.0 && y3[i] > 0.0 && y1[i] < floor && laws::free_flow_limit_level(y3[i], a[i]) < floor) ++under;
+      if (a[i] > 0.0 && y1[i] > y3[i] && y1[i] < floor && laws::free_flow_limit_level(y3[i], a[i]) < floor) ++under;
     }
   }
   return samples == 0 ? 0.0 : static_cast<double>(under) / static_cast<double>(samples);

@@ -164,6 +164,7 @@ TEST(Calibrate, FindsAndFitsATimeOffsetOfEitherSignBetweenCommandAndLevels) {
   const Scenario truth = perturbed_truth();
   std::map<std::string, double> expected = six_values(truth);
   expected["downstream_zero_head_mm"] = 0.0;  // the published law
+  expected["border_floor_ratio"] = truth.head_gate->border_floor_ratio;  // the model's own
   for (const double lead : {0.3, -0.3}) {
     const std::vector<Recording> recordings = record(truth, {"op1", "op2", "op3", "op4"}, 80.0, lead);
     const Calibration c = calibrate(model(), recordings, {}, CalibrateOptions{});
