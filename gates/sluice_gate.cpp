@@ -196,10 +196,9 @@ struct SluiceGate::SeenOpening {
 };
 
 // The border of the flow law: Swamee's y_lc (paper eq. 23), floored at κ y3 (SluiceGateOptions::
-// border_floor_ratio). Without the
-// floor a gate opened wider than ~0.75 y3 (where y_lc < y3) would pass free flow right up to
-// zero head and then jump to reverse flow; with it the flow submerges as the head vanishes and
-// the discharge falls continuously to zero. The paper's regime classification
+// border_floor_ratio). Without the floor a gate opened wider than ~0.75 y3 (where y_lc < y3)
+// would pass free flow right up to zero head and then jump to reverse flow; with it the flow
+// submerges as the head vanishes and the discharge falls continuously to zero. The paper's regime classification
 // (classify_regime) keeps the published condition.
 struct SluiceGate::Border {
   double y_lc = 0.0;

@@ -14,7 +14,7 @@
 //   gates          Swamee's laws (1992) at both gates, with this simulator's own regularisation
 //                  near zero head — the head's power h^0.7 taken as h (h² + ε²)^-0.15, smooth
 //                  through zero — and its own floor of the regime border over the tail, y3 + √((y_lc −
-//                  y3)² + δ²) where the model uses max(y_lc, 1.05 y3). Each gate's face flux is
+//                  y3)² + δ²) where the model uses max(y_lc, κ y3). Each gate's face flux is
 //                  implicit in the depth of the cell beside it (a scalar root per gate and step),
 //                  as a gate near zero head is too stiff for an explicit flux.
 //   reservoir      the pump-fed upstream pool under PID control (gates/reservoir.hpp states the
